@@ -1,0 +1,403 @@
+//! The pose graph as read from a file: poses, relative-pose measurements, information matrices
+//! and FIX ids, kept exactly as written, plus the dense internal index used by the numerics.
+//!
+//! Conventions (DESIGN.md §2, FORMATS.md §2.3): an edge `(i, j, z)` measures the pose of `j` in the
+//! frame of `i`, z ≈ x_i⁻¹ · x_j. In the paper's complex notation (eq. (2)-(4)) an edge carries
+//! Δ_ij = dx + i·dy and R_ij = e^{i·dθ}.
+
+use nalgebra::{Isometry2, Matrix3, Vector2};
+
+/// A vertex id as written in the file. g2o stores ids as a signed 32-bit `int` and refuses
+/// negative ones (FORMATS.md §2.3), so the valid range is `0..=2^31 - 1`.
+pub type VertexId = u32;
+
+/// Largest id g2o, TORO and GTSAM can all read back.
+pub const MAX_VERTEX_ID: VertexId = i32::MAX as VertexId;
+
+/// A planar pose (x, y, θ) exactly as read: θ is not normalized and every value keeps its bits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose2 {
+    pub x: f64,
+    pub y: f64,
+    pub theta: f64,
+}
+
+impl Pose2 {
+    pub const IDENTITY: Pose2 = Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: 0.0,
+    };
+
+    pub fn new(x: f64, y: f64, theta: f64) -> Self {
+        Pose2 { x, y, theta }
+    }
+
+    /// The rigid motion this pose stands for (θ taken modulo 2π).
+    pub fn to_isometry(self) -> Isometry2<f64> {
+        Isometry2::new(Vector2::new(self.x, self.y), self.theta)
+    }
+
+    /// A pose from a rigid motion, with θ in (-π, π].
+    pub fn from_isometry(iso: &Isometry2<f64>) -> Self {
+        Pose2 {
+            x: iso.translation.vector.x,
+            y: iso.translation.vector.y,
+            theta: iso.rotation.angle(),
+        }
+    }
+
+    pub fn values(self) -> [f64; 3] {
+        [self.x, self.y, self.theta]
+    }
+}
+
+/// What the six numbers of an edge's noise block mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NoiseKind {
+    /// Information matrix Ω (inverse covariance), as g2o and TORO define it.
+    Information,
+    /// Covariance matrix Σ = Ω⁻¹, as in GTSAM's `.graph` files (FORMATS.md §5.5).
+    Covariance,
+}
+
+/// A symmetric 3x3 matrix over (x, y, θ), stored as its upper triangle in g2o order
+/// `[m00, m01, m02, m11, m12, m22]` (FORMATS.md §2.2). Whether it is an information or a
+/// covariance matrix is a property of the graph ([`PoseGraph::noise`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymMat3(pub [f64; 6]);
+
+impl SymMat3 {
+    pub const IDENTITY: SymMat3 = SymMat3([1.0, 0.0, 0.0, 1.0, 0.0, 1.0]);
+
+    /// From TORO's order `ff fs ss rr fr sr` = m00 m01 m11 m22 m02 m12 (FORMATS.md §3.1).
+    pub fn from_toro(t: [f64; 6]) -> Self {
+        SymMat3([t[0], t[1], t[4], t[2], t[5], t[3]])
+    }
+
+    /// In TORO's order `ff fs ss rr fr sr` (FORMATS.md §3.1: TORO = (G0, G1, G3, G5, G2, G4)).
+    pub fn to_toro(self) -> [f64; 6] {
+        let g = self.0;
+        [g[0], g[1], g[3], g[5], g[2], g[4]]
+    }
+
+    pub fn matrix(self) -> Matrix3<f64> {
+        let [a, b, c, d, e, f] = self.0;
+        Matrix3::new(a, b, c, b, d, e, c, e, f)
+    }
+
+    fn from_matrix_upper(m: &Matrix3<f64>) -> Self {
+        SymMat3([
+            m[(0, 0)],
+            m[(0, 1)],
+            m[(0, 2)],
+            m[(1, 1)],
+            m[(1, 2)],
+            m[(2, 2)],
+        ])
+    }
+
+    /// Positive definiteness by Cholesky factorization; `Err(k)` names the first (0-based)
+    /// pivot that is not positive (or not finite).
+    pub fn check_positive_definite(self) -> Result<(), usize> {
+        let m = self.matrix();
+        let mut l = Matrix3::<f64>::zeros();
+        for k in 0..3 {
+            let mut d = m[(k, k)];
+            for p in 0..k {
+                d -= l[(k, p)] * l[(k, p)];
+            }
+            // `!(d > 0.0)` also rejects NaN.
+            if !(d > 0.0) || !d.is_finite() {
+                return Err(k);
+            }
+            let lkk = d.sqrt();
+            l[(k, k)] = lkk;
+            for r in k + 1..3 {
+                let mut s = m[(r, k)];
+                for p in 0..k {
+                    s -= l[(r, p)] * l[(k, p)];
+                }
+                l[(r, k)] = s / lkk;
+            }
+        }
+        Ok(())
+    }
+
+    /// The inverse (information <-> covariance); `None` if singular.
+    pub fn inverse(self) -> Option<Self> {
+        let inv = self.matrix().try_inverse()?;
+        let sym = (inv + inv.transpose()) * 0.5;
+        sym.iter()
+            .all(|v| v.is_finite())
+            .then(|| Self::from_matrix_upper(&sym))
+    }
+}
+
+/// A relative-pose measurement between two poses (dense indices into [`PoseGraph::ids`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Edge {
+    pub i: usize,
+    pub j: usize,
+    /// z = (dx, dy, dθ): the pose of `j` in the frame of `i`.
+    pub measurement: Pose2,
+    /// Upper triangle of the noise matrix, g2o order; see [`PoseGraph::noise`].
+    pub noise: SymMat3,
+}
+
+/// A planar pose graph.
+///
+/// Poses are indexed densely `0..n` in ascending id order (`ids[k]` is the file's id of pose
+/// `k`); edges keep the input order, duplicates and direction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseGraph {
+    /// File ids, strictly ascending.
+    pub ids: Vec<VertexId>,
+    /// Initial estimate per pose: the VERTEX line as read, or composed along a spanning tree when
+    /// the file has no vertex lines ([`PoseGraph::initialize_spanning_tree`]).
+    pub poses: Vec<Pose2>,
+    pub edges: Vec<Edge>,
+    /// Dense indices of fixed poses, in the order of the FIX lines, without repeats.
+    pub fixed: Vec<usize>,
+    /// Whether `poses` came from vertex lines in the file.
+    pub vertices_declared: bool,
+    /// Whether edge noise blocks are information or covariance matrices.
+    pub noise: NoiseKind,
+}
+
+impl PoseGraph {
+    pub fn num_poses(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Dense index of a file id.
+    pub fn index_of(&self, id: VertexId) -> Option<usize> {
+        self.ids.binary_search(&id).ok()
+    }
+
+    /// Edge information matrix Ω_e, inverting a covariance if the graph holds covariances.
+    /// `None` only for a singular covariance.
+    pub fn information(&self, e: &Edge) -> Option<SymMat3> {
+        match self.noise {
+            NoiseKind::Information => Some(e.noise),
+            NoiseKind::Covariance => e.noise.inverse(),
+        }
+    }
+
+    /// Converts every noise block to `kind` (inverting 3x3 matrices if the kind changes).
+    /// Returns the position of the first edge whose matrix is singular, if any.
+    pub fn convert_noise(&mut self, kind: NoiseKind) -> Result<(), usize> {
+        if self.noise == kind {
+            return Ok(());
+        }
+        let mut inverted = Vec::with_capacity(self.edges.len());
+        for (k, e) in self.edges.iter().enumerate() {
+            inverted.push(e.noise.inverse().ok_or(k)?);
+        }
+        for (e, m) in self.edges.iter_mut().zip(inverted) {
+            e.noise = m;
+        }
+        self.noise = kind;
+        Ok(())
+    }
+
+    /// Renumbers the ids densely as `0..n` in ascending order of the old ids.
+    pub fn reindex(&mut self) {
+        for (k, id) in self.ids.iter_mut().enumerate() {
+            *id = k as VertexId;
+        }
+    }
+
+    /// Adjacency in compressed form: for pose `k`, `adj[start[k]..start[k + 1]]` lists the edges
+    /// incident to it, in input order.
+    pub fn incidence(&self) -> (Vec<usize>, Vec<usize>) {
+        let n = self.num_poses();
+        let mut start = vec![0usize; n + 1];
+        for e in &self.edges {
+            start[e.i + 1] += 1;
+            start[e.j + 1] += 1;
+        }
+        for k in 0..n {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut adj = vec![0usize; start[n]];
+        for (k, e) in self.edges.iter().enumerate() {
+            adj[fill[e.i]] = k;
+            fill[e.i] += 1;
+            adj[fill[e.j]] = k;
+            fill[e.j] += 1;
+        }
+        (start, adj)
+    }
+
+    /// Connected components: the component label of every pose, labels numbered in order of
+    /// each component's smallest id, and the number of components.
+    pub fn connected_components(&self) -> (Vec<usize>, usize) {
+        let (start, adj) = self.incidence();
+        let n = self.num_poses();
+        let mut label = vec![usize::MAX; n];
+        let mut count = 0;
+        let mut stack = Vec::new();
+        for root in 0..n {
+            if label[root] != usize::MAX {
+                continue;
+            }
+            label[root] = count;
+            stack.push(root);
+            while let Some(u) = stack.pop() {
+                for &k in &adj[start[u]..start[u + 1]] {
+                    let e = &self.edges[k];
+                    let v = if e.i == u { e.j } else { e.i };
+                    if label[v] == usize::MAX {
+                        label[v] = count;
+                        stack.push(v);
+                    }
+                }
+            }
+            count += 1;
+        }
+        (label, count)
+    }
+
+    /// Initial poses composed along a breadth-first spanning tree of each component, rooted at
+    /// the component's smallest id (placed at the origin): x_j = x_i · z for an edge i -> j met
+    /// forwards, x_i = x_j · z⁻¹ met backwards. Neighbours are visited in edge input order, so the
+    /// result is deterministic.
+    pub fn initialize_spanning_tree(&mut self) {
+        let (start, adj) = self.incidence();
+        let n = self.num_poses();
+        let mut pose: Vec<Option<Isometry2<f64>>> = vec![None; n];
+        let mut queue = std::collections::VecDeque::new();
+        for root in 0..n {
+            if pose[root].is_some() {
+                continue;
+            }
+            pose[root] = Some(Isometry2::identity());
+            queue.push_back(root);
+            while let Some(u) = queue.pop_front() {
+                let xu = pose[u].expect("queued poses are set");
+                for &k in &adj[start[u]..start[u + 1]] {
+                    let e = &self.edges[k];
+                    let z = e.measurement.to_isometry();
+                    let (v, xv) = if e.i == u {
+                        (e.j, xu * z)
+                    } else {
+                        (e.i, xu * z.inverse())
+                    };
+                    if pose[v].is_none() {
+                        pose[v] = Some(xv);
+                        queue.push_back(v);
+                    }
+                }
+            }
+        }
+        self.poses = pose
+            .iter()
+            .map(|p| Pose2::from_isometry(&p.expect("every pose is reached from its root")))
+            .collect();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toro_order_matches_formats_md_3_1() {
+        // A matrix with distinct entries m_rc = 10 r + c (upper triangle).
+        let g2o = SymMat3([0.0, 1.0, 2.0, 11.0, 12.0, 22.0]);
+        // TORO writes ff fs ss rr fr sr = m00 m01 m11 m22 m02 m12.
+        assert_eq!(g2o.to_toro(), [0.0, 1.0, 11.0, 22.0, 2.0, 12.0]);
+        assert_eq!(SymMat3::from_toro(g2o.to_toro()), g2o);
+        // The diagonal example of FORMATS.md §3.1: g2o `a 0 0 b 0 c` is TORO `a 0 b c 0 0`.
+        assert_eq!(
+            SymMat3([3.0, 0.0, 0.0, 4.0, 0.0, 5.0]).to_toro(),
+            [3.0, 0.0, 4.0, 5.0, 0.0, 0.0]
+        );
+    }
+
+    #[test]
+    fn positive_definiteness() {
+        assert_eq!(SymMat3::IDENTITY.check_positive_definite(), Ok(()));
+        // FORMATS.md §2.2's examples that g2o loads without complaint.
+        assert_eq!(
+            SymMat3([1.0, -2.0, 0.0, -1.0, 0.0, 1.0]).check_positive_definite(),
+            Err(1)
+        );
+        assert_eq!(
+            SymMat3([-1.0, 0.0, 0.0, 1.0, 0.0, 1.0]).check_positive_definite(),
+            Err(0)
+        );
+        // Positive diagonal, but det([[1, 2], [2, 1]]) < 0.
+        assert_eq!(
+            SymMat3([1.0, 2.0, 0.0, 1.0, 0.0, 1.0]).check_positive_definite(),
+            Err(1)
+        );
+        // Zero rotation information: positive semidefinite only.
+        assert_eq!(
+            SymMat3([1.0, 0.0, 0.0, 1.0, 0.0, 0.0]).check_positive_definite(),
+            Err(2)
+        );
+    }
+
+    #[test]
+    fn inverse_of_diagonal() {
+        let cov = SymMat3([0.01, 0.0, 0.0, 0.04, 0.0, 0.25]);
+        let info = cov.inverse().unwrap();
+        let expect = [100.0, 0.0, 0.0, 25.0, 0.0, 4.0];
+        for (a, b) in info.0.iter().zip(expect) {
+            assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} vs {b}");
+        }
+    }
+
+    fn graph(n: usize, edges: &[(usize, usize, Pose2)]) -> PoseGraph {
+        PoseGraph {
+            ids: (0..n as VertexId).collect(),
+            poses: vec![Pose2::IDENTITY; n],
+            edges: edges
+                .iter()
+                .map(|&(i, j, z)| Edge {
+                    i,
+                    j,
+                    measurement: z,
+                    noise: SymMat3::IDENTITY,
+                })
+                .collect(),
+            fixed: vec![],
+            vertices_declared: false,
+            noise: NoiseKind::Information,
+        }
+    }
+
+    #[test]
+    fn spanning_tree_composes_forward_and_backward() {
+        use std::f64::consts::FRAC_PI_2;
+        // 0 -> 1: one metre ahead, turn left; edge written backwards 2 -> 1.
+        let mut g = graph(
+            3,
+            &[
+                (0, 1, Pose2::new(1.0, 0.0, FRAC_PI_2)),
+                (2, 1, Pose2::new(0.0, -2.0, 0.0)),
+            ],
+        );
+        g.initialize_spanning_tree();
+        // By hand: x1 = (1, 0, π/2). x2 · (0, -2, 0) = x1, so x2 = x1 · (0, 2, 0) =
+        // (1 + cos(π/2)·0 - sin(π/2)·2, 0 + sin(π/2)·0 + cos(π/2)·2, π/2) = (-1, 0, π/2).
+        let p = &g.poses;
+        assert_eq!(p[0], Pose2::IDENTITY);
+        assert!((p[1].x - 1.0).abs() < 1e-15 && p[1].y.abs() < 1e-15);
+        assert!((p[1].theta - FRAC_PI_2).abs() < 1e-15);
+        assert!((p[2].x + 1.0).abs() < 1e-15 && p[2].y.abs() < 1e-15);
+        assert!((p[2].theta - FRAC_PI_2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn components_count_isolated_poses() {
+        let g = graph(5, &[(0, 1, Pose2::IDENTITY), (3, 4, Pose2::IDENTITY)]);
+        let (label, count) = g.connected_components();
+        assert_eq!(count, 3);
+        assert_eq!(label, vec![0, 0, 1, 2, 2]);
+    }
+}

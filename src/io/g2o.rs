@@ -1,0 +1,43 @@
+//! The g2o 2D format (FORMATS.md §2): `VERTEX_SE2 id x y θ`,
+//! `EDGE_SE2 i j dx dy dθ I11 I12 I13 I22 I23 I33` (information, upper triangle row by row) and
+//! `FIX id ...`.
+
+/// Vertex tag.
+pub const VERTEX: &str = "VERTEX_SE2";
+/// Edge tag.
+pub const EDGE: &str = "EDGE_SE2";
+/// Gauge-fixing line; several ids per line, anywhere in the file.
+pub const FIX: &str = "FIX";
+
+/// g2o tags of 3D types (FORMATS.md §2.6), rejected with a specific message.
+pub const THREE_D: &[&str] = &[
+    "VERTEX_SE3:QUAT",
+    "EDGE_SE3:QUAT",
+    "VERTEX_SE3:EXPMAP",
+    "EDGE_SE3:EXPMAP",
+    "VERTEX_TRACKXYZ",
+    "EDGE_SE3_TRACKXYZ",
+    "EDGE_SE3_PRIOR",
+    "EDGE_SE3_XYZ_PRIOR",
+    "PARAMS_SE3OFFSET",
+    "EDGE_POINTXYZ",
+    "EDGE_POINTXYZ_PRIOR",
+];
+
+/// g2o tags of 2D landmark types (FORMATS.md §2.1).
+pub const LANDMARK: &[&str] = &[
+    "VERTEX_XY",
+    "EDGE_SE2_XY",
+    "EDGE_SE2_POINTXY",
+    "EDGE_POINTXY",
+    "EDGE_PRIOR_XY",
+    "EDGE_BEARING_SE2_XY",
+    "EDGE_SE2_XY_CALIB",
+    "EDGE_SE2_POINTXY_OFFSET",
+    "EDGE_SE2_TWOPOINTSXY",
+    "EDGE_SE2_LOTSOFXY",
+];
+
+/// g2o tags of unary priors on poses (`EDGE_SE2_PRIOR` is a common misspelling g2o itself does
+/// not register).
+pub const PRIOR: &[&str] = &["EDGE_PRIOR_SE2", "EDGE_PRIOR_SE2_XY", "EDGE_SE2_PRIOR"];
