@@ -33,7 +33,13 @@ pub struct Args {
     pub input: String,
 
     /// Output file, or - for stdout
-    #[arg(short, long, value_name = "OUT", default_value = "-", conflicts_with = "stats")]
+    #[arg(
+        short,
+        long,
+        value_name = "OUT",
+        default_value = "-",
+        conflicts_with = "stats"
+    )]
     pub output: String,
 
     /// Input format [default: from the extension (.g2o, .graph), else from the tags]
@@ -222,7 +228,10 @@ fn stats_text(name: &str, s: &GraphStats, report: &io::ReadReport) -> String {
             ),
         ),
         ("edges", s.edges.to_string()),
-        ("odometry edges", format!("{} (j = i + 1)", s.odometry_edges)),
+        (
+            "odometry edges",
+            format!("{} (j = i + 1)", s.odometry_edges),
+        ),
         ("loop closures", s.loop_closures.to_string()),
         ("backward edges", format!("{} (i > j)", s.backward_edges)),
         (
@@ -234,7 +243,10 @@ fn stats_text(name: &str, s: &GraphStats, report: &io::ReadReport) -> String {
         ),
         ("components", s.components.to_string()),
         ("isolated poses", s.isolated_poses.to_string()),
-        ("id range", format!("{} .. {}", opt(s.id_min), opt(s.id_max))),
+        (
+            "id range",
+            format!("{} .. {}", opt(s.id_min), opt(s.id_max)),
+        ),
         ("id gaps", s.id_gaps.to_string()),
         ("fixed", fixed),
     ];

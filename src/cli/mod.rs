@@ -6,6 +6,12 @@ pub mod convert;
 
 use std::process::ExitCode;
 
+/// The clap definition of every tool, for man pages and shell completions.
+pub fn commands() -> Vec<clap::Command> {
+    use clap::CommandFactory;
+    vec![convert::Args::command()]
+}
+
 /// Exit status for errors in the input or the request.
 pub const EXIT_ERROR: u8 = 2;
 

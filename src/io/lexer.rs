@@ -125,9 +125,11 @@ pub fn parse_id(field: &Field) -> Result<VertexId, ParseErrorKind> {
                 let next = acc * 10 + u64::from(d - b'0');
                 (next <= u64::from(MAX_VERTEX_ID)).then_some(next)
             });
-            return value
-                .map(|v| v as VertexId)
-                .ok_or_else(|| invalid("ids must be at most 2^31 - 1 = 2147483647 (g2o stores them as a 32-bit int)"));
+            return value.map(|v| v as VertexId).ok_or_else(|| {
+                invalid(
+                    "ids must be at most 2^31 - 1 = 2147483647 (g2o stores them as a 32-bit int)",
+                )
+            });
         }
         if rest[0] == b'.' || rest[0] == b'e' || rest[0] == b'E' {
             return Err(invalid("ids are integers"));
@@ -197,10 +199,20 @@ mod tests {
             let e = num(s).unwrap_err().to_string();
             assert!(e.contains("non-finite"), "{s}: {e}");
         }
-        assert!(num("0,5").unwrap_err().to_string().contains("decimal comma"));
+        assert!(
+            num("0,5")
+                .unwrap_err()
+                .to_string()
+                .contains("decimal comma")
+        );
         assert!(num("0x10").unwrap_err().to_string().contains("hexadecimal"));
         assert!(num("1e400").unwrap_err().to_string().contains("overflows"));
-        assert!(num("1e-400").unwrap_err().to_string().contains("underflows"));
+        assert!(
+            num("1e-400")
+                .unwrap_err()
+                .to_string()
+                .contains("underflows")
+        );
         for s in ["abc", "1.2.3", "1e", "--1", "1-"] {
             assert!(
                 matches!(num(s), Err(ParseErrorKind::NotANumber { .. })),

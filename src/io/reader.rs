@@ -111,10 +111,7 @@ struct Skipped {
 }
 
 /// Reads a pose graph from a file path, or from stdin when `path` is `-`.
-pub fn read_path(
-    path: &str,
-    options: &ReadOptions,
-) -> crate::Result<(PoseGraph, ReadReport)> {
+pub fn read_path(path: &str, options: &ReadOptions) -> crate::Result<(PoseGraph, ReadReport)> {
     if path == "-" {
         let stdin = std::io::stdin();
         return read(stdin.lock(), "<stdin>", options);

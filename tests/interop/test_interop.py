@@ -286,6 +286,14 @@ GTSAM_REVERSE = ["MIT.g2o", "intel.g2o", "M3500.g2o", "FRH.g2o", "input_INTEL_g2
 G2O_REVERSE = ["MIT.g2o", "intel.g2o", "M3500.g2o", "FRH.g2o", "input_INTEL_g2o.g2o",
                "intel_openslam_g2o.g2o", "manhattanOlson3500.g2o", "ring.g2o", "handmade.g2o"]
 
+# Data sets whose nearly singular information matrices become indefinite once a peer rounds them
+# to 6 significant digits, so pgo (which rejects non-PD matrices by default) needs
+# --allow-indefinite to read the peer's file. input_INTEL_g2o.g2o, edge 74->75:
+# 27289611.550657 -24363663.505902 0 21751450.848890 0 1358.565441 has det(xy block) = 5.4e8, but
+# the peers write 2.72896e+07 -2.43637e+07 0 2.17515e+07 0 1358.57, det(xy block) = -1.4e8.
+# (GTSAM itself reads such a file silently: its Cholesky has no success check, FORMATS.md §5.3.)
+INDEFINITE_AFTER_ROUNDING = {"input_INTEL_g2o.g2o"}
+
 
 @pytest.fixture(scope="session")
 def input_path(datasets_dir, tmp_path_factory):
@@ -431,11 +439,26 @@ def test_g2o_reads_pgo_output(case, converted):
 # ---------------------------------------------------------------------------------------------
 
 
-def check_pgo_reads_peer_file(run_pgo, peer_file: Path, tmp_path: Path, peer: str) -> None:
-    out = tmp_path / "pgo_from_peer.g2o"
-    run_pgo([peer_file, "-o", out])
+def is_positive_definite(info: tuple[float, ...]) -> bool:
+    try:
+        np.linalg.cholesky(info_matrix(info))
+        return True
+    except np.linalg.LinAlgError:
+        return False
+
+
+def check_pgo_reads_peer_file(run_pgo, name: str, peer_file: Path, tmp_path: Path, peer: str):
     want = read_graph(peer_file)  # float() of the peer's 6-digit tokens
     assert want.edges, f"{peer} wrote no edges to {peer_file}; the test would be vacuous"
+    args = []
+    if name in INDEFINITE_AFTER_ROUNDING:
+        # Keep the exception honest: fail if the flag is no longer needed.
+        assert not all(is_positive_definite(e[3]) for e in want.edges), (
+            f"{peer}'s rewrite of {name} has only PD matrices; drop it from INDEFINITE_AFTER_ROUNDING"
+        )
+        args.append("--allow-indefinite")
+    out = tmp_path / "pgo_from_peer.g2o"
+    run_pgo([peer_file, "-o", out, *args])
     got = parse_pgo_output(out)
     compare_graphs_exact(got, want, f"pgo reading {peer}-written {peer_file.name}")
 
@@ -446,7 +469,7 @@ def test_pgo_reads_gtsam_written(name, input_path, run_pgo, tmp_path):
     graph, values = load_gtsam(input_path(name))
     peer_file = tmp_path / f"gtsam_{Path(name).stem}.g2o"
     gtsam.writeG2o(graph, values, str(peer_file))
-    check_pgo_reads_peer_file(run_pgo, peer_file, tmp_path, "GTSAM")
+    check_pgo_reads_peer_file(run_pgo, name, peer_file, tmp_path, "GTSAM")
 
 
 @pytest.mark.parametrize("name", G2O_REVERSE)
@@ -455,7 +478,7 @@ def test_pgo_reads_g2o_written(name, input_path, run_pgo, tmp_path):
     opt = load_g2opy(input_path(name))
     peer_file = tmp_path / f"g2o_{Path(name).stem}.g2o"
     assert opt.save(str(peer_file)), f"g2opy could not save {peer_file}"
-    check_pgo_reads_peer_file(run_pgo, peer_file, tmp_path, "g2o")
+    check_pgo_reads_peer_file(run_pgo, name, peer_file, tmp_path, "g2o")
 
 
 # ---------------------------------------------------------------------------------------------

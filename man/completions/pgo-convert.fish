@@ -1,0 +1,22 @@
+complete -c pgo-convert -s o -l output -d 'Output file, or - for stdout' -r
+complete -c pgo-convert -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-convert -l to -d 'Output format [default: from the output\'s extension, else the input format]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-convert -l dialect -d 'How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]' -r -f -a "g2o\t'Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM\'s readG2o)'
+toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
+toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
+g2o-cov\t'Covariance, g2o order'"
+complete -c pgo-convert -l to-dialect -d 'How to write the noise values [default: g2o for g2o output, toro-info for TORO output]; covariances and information matrices are inverted into each other when the kinds differ' -r -f -a "g2o\t'Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM\'s readG2o)'
+toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
+toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
+g2o-cov\t'Covariance, g2o order'"
+complete -c pgo-convert -l reindex -d 'Renumber vertices 0..n-1 in ascending order of their ids'
+complete -c pgo-convert -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
+complete -c pgo-convert -l allow-indefinite -d 'Accept noise matrices that are not positive definite'
+complete -c pgo-convert -l stats -d 'Print statistics (poses, edges, odometry and loop closures, components, ids, duplicates) instead of converting'
+complete -c pgo-convert -l json -d 'With --stats: one JSON object on stdout'
+complete -c pgo-convert -l timings -d 'Print the time spent reading and writing on stderr'
+complete -c pgo-convert -s q -l quiet -d 'Do not print the summary line on stderr (warnings are still printed)'
+complete -c pgo-convert -s h -l help -d 'Print help (see more with \'--help\')'
+complete -c pgo-convert -s V -l version -d 'Print version'

@@ -1,0 +1,58 @@
+#compdef pgo-convert
+
+autoload -U is-at-least
+
+_pgo-convert() {
+    typeset -A opt_args
+    typeset -a _arguments_options
+    local ret=1
+
+    if is-at-least 5.2; then
+        _arguments_options=(-s -S -C)
+    else
+        _arguments_options=(-s -C)
+    fi
+
+    local context curcontext="$curcontext" state line
+    _arguments "${_arguments_options[@]}" : \
+'(--stats)-o+[Output file, or - for stdout]:OUT:_default' \
+'(--stats)--output=[Output file, or - for stdout]:OUT:_default' \
+'--from=[Input format \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'(--stats)--to=[Output format \[default\: from the output'\''s extension, else the input format\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'--dialect=[How to read the six noise values of each edge \[default\: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags\]]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
+toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"
+toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D\` as covariances)"
+g2o-cov\:"Covariance, g2o order"))' \
+'(--stats)--to-dialect=[How to write the noise values \[default\: g2o for g2o output, toro-info for TORO output\]; covariances and information matrices are inverted into each other when the kinds differ]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
+toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"
+toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D\` as covariances)"
+g2o-cov\:"Covariance, g2o order"))' \
+'--reindex[Renumber vertices 0..n-1 in ascending order of their ids]' \
+'--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
+'--allow-indefinite[Accept noise matrices that are not positive definite]' \
+'--stats[Print statistics (poses, edges, odometry and loop closures, components, ids, duplicates) instead of converting]' \
+'--json[With --stats\: one JSON object on stdout]' \
+'--timings[Print the time spent reading and writing on stderr]' \
+'-q[Do not print the summary line on stderr (warnings are still printed)]' \
+'--quiet[Do not print the summary line on stderr (warnings are still printed)]' \
+'-h[Print help (see more with '\''--help'\'')]' \
+'--help[Print help (see more with '\''--help'\'')]' \
+'-V[Print version]' \
+'--version[Print version]' \
+':input -- Input file, or - for stdin:_default' \
+&& ret=0
+}
+
+(( $+functions[_pgo-convert_commands] )) ||
+_pgo-convert_commands() {
+    local commands; commands=()
+    _describe -t commands 'pgo-convert commands' commands "$@"
+}
+
+if [ "$funcstack[1]" = "_pgo-convert" ]; then
+    _pgo-convert "$@"
+else
+    compdef _pgo-convert pgo-convert
+fi
