@@ -63,7 +63,9 @@ pub enum ParseErrorKind {
         "unary priors are not supported (tag {tag}): pgo fixes the gauge itself; FIX lines are kept"
     )]
     Prior { tag: String },
-    #[error("EQUIV (vertex equivalence) lines are not supported; they are skipped unless --strict")]
+    #[error(
+        "EQUIV (vertex equivalence) lines are not supported (without --strict they are skipped with a warning)"
+    )]
     Equiv,
     #[error("unknown tag '{tag}'")]
     UnknownTag { tag: String },

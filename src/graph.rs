@@ -108,8 +108,8 @@ impl SymMat3 {
             for p in 0..k {
                 d -= l[(k, p)] * l[(k, p)];
             }
-            // `!(d > 0.0)` also rejects NaN.
-            if !(d > 0.0) || !d.is_finite() {
+            // Rejects NaN too.
+            if d.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !d.is_finite() {
                 return Err(k);
             }
             let lkk = d.sqrt();

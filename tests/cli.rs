@@ -171,7 +171,7 @@ fn every_validation_error_has_its_location_and_status_2() {
             "edge tags of both formats",
         ),
         (
-            format!("\u{feff}VERTEX_SE2 0 0 0 x\n"),
+            "\u{feff}VERTEX_SE2 0 0 0 x\n".to_string(),
             "1:18",
             "expected a number, found 'x'",
         ),

@@ -190,7 +190,8 @@ fn files_without_vertices_get_spanning_tree_poses_consistent_with_tree_edges() {
 #[test]
 fn statistics_match_the_dataset_readme() {
     // (file, duplicate pairs, identical duplicates, backward edges) from README.md/MANIFEST.tsv.
-    let cases: &[(&str, Option<usize>, Option<usize>, Option<usize>)] = &[
+    type Case = (&'static str, Option<usize>, Option<usize>, Option<usize>);
+    let cases: &[Case] = &[
         ("CSAIL.g2o", Some(1), Some(1), None),
         ("kitti_00.g2o", Some(1), Some(1), Some(137)),
         ("kitti_02.g2o", None, None, Some(43)),

@@ -65,9 +65,8 @@ pub fn split_fields<'a>(line: &'a [u8], out: &mut Vec<Field<'a>>) {
 pub fn parse_f64(field: &Field) -> Result<f64, ParseErrorKind> {
     let text = field.text;
     let recognized = recognize_float::<&[u8], nom::error::Error<&[u8]>>(text);
-    match recognized {
-        Ok((rest, _)) if rest.is_empty() => {}
-        _ => return Err(not_a_number(field)),
+    if !matches!(recognized, Ok((&[], _))) {
+        return Err(not_a_number(field));
     }
     // `recognize_float` only matches ASCII, so this cannot fail.
     let s = std::str::from_utf8(text).map_err(|_| not_a_number(field))?;

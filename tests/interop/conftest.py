@@ -3,7 +3,8 @@
 Environment:
   PGO_BIN_DIR       directory holding the `pgo-convert` binary
                     (default: <repo>/target/release; relative paths are taken from the repo root)
-  PGO_DATASETS_DIR  directory holding the public data sets (default: /work/shared/datasets)
+  PGO_DATASETS_DIR  directory holding the public data sets
+                    (default: ../shared/datasets relative to the repo root)
 """
 
 import os
@@ -13,7 +14,7 @@ from pathlib import Path
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_DATASETS_DIR = Path("/work/shared/datasets")
+DEFAULT_DATASETS_DIR = REPO_ROOT.parent / "shared" / "datasets"
 
 
 def _bin_dir() -> Path:

@@ -17,7 +17,7 @@ lines sorted by id, then `EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33` in 
 direction, then at most one `FIX id ...` line. Floats are printed in shortest round-trip form, so
 Python's float() yields exactly the f64 pgo holds, and values are kept as read (no angle wrapping).
 
-Format background: /work/shared/formats/FORMATS.md (sections 2, 3 and 5).
+Format background: ../shared/formats/FORMATS.md (sections 2, 3 and 5).
 """
 
 from __future__ import annotations
