@@ -2,12 +2,12 @@
 //! (as GTSAM does); how the six noise values are read is decided per file by the dialect
 //! (FORMATS.md §7.2), never per tag.
 
-use super::lexer::{Field, parse_f64, parse_id, split_fields};
+use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
 use super::{Dialect, Format, g2o, toro};
 use crate::error::{Location, ParseError, ParseErrorKind, Warning};
 use crate::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
 use std::collections::HashMap;
-use std::io::BufRead;
+use std::io::Read;
 
 /// How to read a file.
 #[derive(Debug, Clone, Default)]
@@ -88,26 +88,47 @@ struct RawVertex {
     col: usize,
 }
 
-/// An edge line before ids are resolved and before the dialect is known.
-struct RawEdge {
-    i: VertexId,
-    j: VertexId,
-    z: Pose2,
-    /// The six noise values in file order.
-    values: [f64; 6],
+/// Where an edge line's fields are, for messages after the whole file is read (32-bit to keep
+/// the per-edge memory small; positions beyond 2^32 - 1 are shown as 4294967295).
+struct EdgeSite {
+    line: u32,
+    col_i: u32,
+    col_j: u32,
+    col_noise: u32,
 }
 
-/// Where an edge line's fields are, for messages after the whole file is read.
-struct EdgeSite {
-    line: usize,
-    col_i: usize,
-    col_j: usize,
-    col_noise: usize,
+fn narrow(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
 }
 
 struct Skipped {
     first_line: usize,
     count: usize,
+}
+
+/// Where an edge tag first appears.
+#[derive(Debug, Clone)]
+struct EdgeTag {
+    family: Family,
+    line: usize,
+    col: usize,
+    tag: String,
+}
+
+/// What a run of consecutive lines holds, before ids are resolved.
+#[derive(Default)]
+struct Block {
+    vertices: Vec<RawVertex>,
+    /// Edges as read: `i` and `j` hold the file's ids, `noise` the six values in file order
+    /// (both are resolved in [`Reader::finish`], in place).
+    edges: Vec<Edge>,
+    sites: Vec<EdgeSite>,
+    fixed: Vec<(VertexId, usize, usize)>,
+    /// The first edge tag: its family, line and spelling.
+    first_edge_tag: Option<EdgeTag>,
+    first_vertex_family: Option<Family>,
+    unknown: Vec<(String, Skipped)>,
+    equiv: Option<Skipped>,
 }
 
 /// Reads a pose graph from a file path, or from stdin when `path` is `-`.
@@ -117,89 +138,605 @@ pub fn read_path(path: &str, options: &ReadOptions) -> crate::Result<(PoseGraph,
         return read(stdin.lock(), "<stdin>", options);
     }
     let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
-    let reader = std::io::BufReader::with_capacity(1 << 16, file);
-    read(reader, path, options)
+    let size = file.metadata().ok().map(|m| m.len());
+    read_sized(file, path, options, size)
 }
 
 /// Reads a pose graph from `input`; `name` is the path used in messages and for the extension.
-pub fn read<R: BufRead>(
+///
+/// The input is read in chunks of [`CHUNK`] bytes, so memory beyond the graph itself stays
+/// bounded; large chunks are parsed by two threads, each on its own half (split at a line
+/// boundary), and the halves are merged in file order, so the result, warnings and the error
+/// reported (the first in the file) do not depend on the number of threads.
+pub fn read<R: Read>(
     input: R,
     name: &str,
     options: &ReadOptions,
 ) -> crate::Result<(PoseGraph, ReadReport)> {
-    let mut r = Reader::new(name, options);
-    r.read_lines(input)?;
+    read_sized(input, name, options, None)
+}
+
+/// [`read`] knowing the input's size in bytes, if it is known, to size buffers once.
+fn read_sized<R: Read>(
+    input: R,
+    name: &str,
+    options: &ReadOptions,
+    size: Option<u64>,
+) -> crate::Result<(PoseGraph, ReadReport)> {
+    let mut r = Reader {
+        name: name.to_string(),
+        options,
+        acc: Block::default(),
+        lines: 0,
+        size,
+    };
+    r.read_chunks(input)?;
     Ok(r.finish()?)
+}
+
+/// Bytes read and parsed at a time.
+const CHUNK: usize = 8 << 20;
+/// Chunks at least this large are parsed by two threads.
+const PARALLEL_MIN: usize = 512 << 10;
+
+/// Parses the lines of one block.
+struct BlockParser<'a> {
+    name: &'a str,
+    options: &'a ReadOptions,
+    block: Block,
+    /// The file's first edge tag, when known: later edge tags of the other format are an error.
+    reference: Option<EdgeTag>,
+}
+
+/// Parses `bytes`, complete lines whose first is line `first_line` of the file, reserving room
+/// for at least `capacity` vertices and edges.
+fn parse_block(
+    name: &str,
+    options: &ReadOptions,
+    bytes: &[u8],
+    first_line: usize,
+    reference: Option<EdgeTag>,
+    capacity: usize,
+) -> Result<Block, ParseError> {
+    // Every line holds at most one vertex or edge: reserving for all of them avoids regrowing
+    // (pages that are reserved but never written cost nothing).
+    let capacity = capacity.max(memchr::memchr_iter(b'\n', bytes).count() + 1);
+    let mut block = Block::default();
+    block.edges.reserve(capacity);
+    block.sites.reserve(capacity);
+    block.vertices.reserve(capacity);
+    let mut p = BlockParser {
+        name,
+        options,
+        block,
+        reference,
+    };
+    // Field storage reused across lines (see `recycle`).
+    let mut spare: Vec<Field<'static>> = Vec::with_capacity(16);
+    let mut line_no = first_line;
+    let mut pos = 0;
+    while pos < bytes.len() {
+        let end = memchr::memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |k| pos + k);
+        let mut line = &bytes[pos..end];
+        if line_no == 1 {
+            line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
+        }
+        if !p.fast_line(line_no, line) {
+            let mut fields = recycle(std::mem::take(&mut spare));
+            split_fields(line, &mut fields);
+            p.line(line_no, line, &fields)?;
+            spare = recycle(fields);
+        }
+        pos = end + 1;
+        line_no += 1;
+    }
+    Ok(p.block)
 }
 
 struct Reader<'o> {
     name: String,
     options: &'o ReadOptions,
-    vertices: Vec<RawVertex>,
-    edges: Vec<RawEdge>,
-    sites: Vec<EdgeSite>,
-    fixed: Vec<(VertexId, usize, usize)>,
-    /// The first edge tag: its family, line and spelling.
-    first_edge_tag: Option<(Family, usize, String)>,
-    first_vertex_family: Option<Family>,
-    unknown: Vec<(String, Skipped)>,
-    equiv: Option<Skipped>,
+    acc: Block,
     lines: usize,
+    /// Size of the input in bytes, if known.
+    size: Option<u64>,
 }
 
 impl<'o> Reader<'o> {
-    fn new(name: &str, options: &'o ReadOptions) -> Self {
-        Reader {
-            name: name.to_string(),
-            options,
-            vertices: Vec::new(),
-            edges: Vec::new(),
-            sites: Vec::new(),
-            fixed: Vec::new(),
-            first_edge_tag: None,
-            first_vertex_family: None,
-            unknown: Vec::new(),
-            equiv: None,
-            lines: 0,
+    fn error(&self, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
+        make_error(&self.name, line, col, kind)
+    }
+
+    fn read_chunks<R: Read>(&mut self, mut input: R) -> crate::Result<()> {
+        // No larger than the file: every byte of the buffer touched costs a page fault.
+        let first = self
+            .size
+            .map_or(CHUNK, |s| (s as usize).saturating_add(1).min(CHUNK));
+        let mut buf = vec![0u8; first.max(4096)];
+        let mut filled = 0;
+        loop {
+            if filled == buf.len() {
+                // A single line longer than the buffer.
+                buf.resize(2 * buf.len(), 0);
+            }
+            let mut eof = false;
+            while filled < buf.len() {
+                match input.read(&mut buf[filled..]) {
+                    Ok(0) => {
+                        eof = true;
+                        break;
+                    }
+                    Ok(n) => filled += n,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(e) => return Err(crate::Error::io(self.name.clone(), e)),
+                }
+            }
+            let end = if eof {
+                filled
+            } else {
+                match memchr::memrchr(b'\n', &buf[..filled]) {
+                    Some(p) => p + 1,
+                    None => continue,
+                }
+            };
+            self.parse_chunk(&buf[..end])?;
+            buf.copy_within(end..filled, 0);
+            filled -= end;
+            if eof {
+                return Ok(());
+            }
         }
     }
 
-    fn error(&self, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
-        ParseError {
+    /// Parses complete lines following those read so far.
+    fn parse_chunk(&mut self, bytes: &[u8]) -> Result<(), ParseError> {
+        let first_line = self.lines + 1;
+        let lines = memchr::memchr_iter(b'\n', bytes).count() + 1;
+        self.lines += lines - usize::from(bytes.last().is_none_or(|&c| c == b'\n'));
+        // The first block is given room for the whole file's lines, estimated from this chunk's
+        // density, so later blocks append without reallocating (unused capacity is never
+        // touched, so it costs no memory).
+        let capacity = match self.size {
+            Some(size) if self.acc.edges.capacity() == 0 && !bytes.is_empty() => {
+                (lines as u128 * u128::from(size) / bytes.len() as u128) as usize + 16
+            }
+            _ => lines,
+        };
+        let split = (bytes.len() >= PARALLEL_MIN
+            && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1))
+        .then(|| memchr::memchr(b'\n', &bytes[bytes.len() / 2..]).map(|k| bytes.len() / 2 + k + 1))
+        .flatten();
+        let reference = self.acc.first_edge_tag.clone();
+        let Some(mid) = split else {
+            let block = parse_block(
+                &self.name,
+                self.options,
+                bytes,
+                first_line,
+                reference,
+                capacity,
+            )?;
+            return self.append(block);
+        };
+        let (a, b) = bytes.split_at(mid);
+        let b_first_line = first_line + memchr::memchr_iter(b'\n', a).count();
+        let (name, options) = (self.name.as_str(), self.options);
+        let (ra, rb) = std::thread::scope(|s| {
+            let hb = s.spawn(|| parse_block(name, options, b, b_first_line, None, 0));
+            let ra = parse_block(name, options, a, first_line, reference, capacity);
+            (ra, hb.join().expect("the parser does not panic"))
+        });
+        self.append(ra?)?;
+        match rb {
+            Ok(block) => self.append(block),
+            // The second half was parsed without knowing the first's edge tags; parse it again
+            // knowing them, so the error reported is the first in the file.
+            Err(_) => {
+                let reference = self.acc.first_edge_tag.clone();
+                let block = parse_block(&self.name, self.options, b, b_first_line, reference, 0)?;
+                self.append(block)
+            }
+        }
+    }
+
+    /// Appends the next block in file order.
+    fn append(&mut self, b: Block) -> Result<(), ParseError> {
+        if let (Some(a), Some(b)) = (&self.acc.first_edge_tag, &b.first_edge_tag) {
+            if a.family != b.family && self.options.dialect.is_none() {
+                return Err(self.error(b.line, b.col, mixed_tags(a, &b.tag)));
+            }
+        }
+        let acc = &mut self.acc;
+        extend(&mut acc.vertices, b.vertices);
+        extend(&mut acc.edges, b.edges);
+        extend(&mut acc.sites, b.sites);
+        extend(&mut acc.fixed, b.fixed);
+        if acc.first_edge_tag.is_none() {
+            acc.first_edge_tag = b.first_edge_tag;
+        }
+        if acc.first_vertex_family.is_none() {
+            acc.first_vertex_family = b.first_vertex_family;
+        }
+        for (tag, s) in b.unknown {
+            match acc.unknown.iter_mut().find(|(t, _)| *t == tag) {
+                Some((_, known)) => known.count += s.count,
+                None => acc.unknown.push((tag, s)),
+            }
+        }
+        match (&mut acc.equiv, b.equiv) {
+            (Some(known), Some(s)) => known.count += s.count,
+            (known @ None, s) => *known = s,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(PoseGraph, ReadReport), ParseError> {
+        let (format, format_reason) = self.decide_format();
+        let mut warnings = Vec::new();
+        let declared = !self.acc.vertices.is_empty();
+        let (ids, poses) = self.vertex_table()?;
+        let index = IdIndex::new(&ids);
+
+        let (dialect, dialect_reason) = self.decide_dialect(format, &mut warnings);
+        let mut edges = std::mem::take(&mut self.acc.edges);
+        for (e, site) in edges.iter_mut().zip(&self.acc.sites) {
+            let (Some(i), Some(j)) = (index.get(e.i as VertexId), index.get(e.j as VertexId))
+            else {
+                let (id, col) = match index.get(e.i as VertexId) {
+                    None => (e.i, site.col_i),
+                    Some(_) => (e.j, site.col_j),
+                };
+                return Err(self.error(
+                    site.line as usize,
+                    col as usize,
+                    ParseErrorKind::UndeclaredVertex { id: id as VertexId },
+                ));
+            };
+            e.i = i;
+            e.j = j;
+            e.noise = noise_matrix(e.noise.0, dialect);
+        }
+
+        let mut fixed = Vec::with_capacity(self.acc.fixed.len());
+        let mut is_fixed = vec![false; ids.len()];
+        for &(id, line, col) in &self.acc.fixed {
+            let k = index
+                .get(id)
+                .ok_or_else(|| self.error(line, col, ParseErrorKind::UnknownFixed { id }))?;
+            if !std::mem::replace(&mut is_fixed[k], true) {
+                fixed.push(k);
+            }
+        }
+
+        if !self.options.allow_indefinite {
+            self.check_positive_definite(&edges, dialect)?;
+        }
+
+        for (tag, s) in &self.acc.unknown {
+            warnings.push(self.warning(
+                s.first_line,
+                format!(
+                    "unknown tag '{tag}': {} skipped (first here)",
+                    plural(s.count, "line")
+                ),
+            ));
+        }
+        if let Some(s) = &self.acc.equiv {
+            warnings.push(self.warning(
+                s.first_line,
+                format!(
+                    "EQUIV (vertex equivalence) is not supported: {} skipped (first here)",
+                    plural(s.count, "line")
+                ),
+            ));
+        }
+        warnings.sort_by_key(|w| w.location.line);
+
+        let mut graph = PoseGraph {
+            ids,
+            poses,
+            edges,
+            fixed,
+            vertices_declared: declared,
+            noise: dialect.noise(),
+        };
+        if !declared {
+            graph.initialize_spanning_tree();
+        }
+        let report = ReadReport {
+            format,
+            format_reason,
+            dialect,
+            dialect_reason,
+            warnings,
+            lines: self.lines,
+        };
+        Ok((graph, report))
+    }
+
+    fn warning(&self, line: usize, message: String) -> Warning {
+        Warning {
             location: Location {
                 path: self.name.clone(),
                 line,
-                col,
+                col: 1,
             },
-            kind,
+            message,
         }
     }
 
-    fn read_lines<R: BufRead>(&mut self, mut input: R) -> crate::Result<()> {
-        let mut buf = Vec::with_capacity(256);
-        // Field storage reused across lines (see `recycle`).
-        let mut spare: Vec<Field<'static>> = Vec::with_capacity(16);
-        let mut line_no = 0;
-        loop {
-            buf.clear();
-            let n = input
-                .read_until(b'\n', &mut buf)
-                .map_err(|e| crate::Error::io(self.name.clone(), e))?;
-            if n == 0 {
-                break;
-            }
-            line_no += 1;
-            let mut line: &[u8] = &buf;
-            if line_no == 1 {
-                line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
-            }
-            let mut fields = recycle(std::mem::take(&mut spare));
-            split_fields(line, &mut fields);
-            self.line(line_no, line, &fields)?;
-            spare = recycle(fields);
+    fn decide_format(&self) -> (Format, &'static str) {
+        if let Some(f) = self.options.format {
+            return (f, "flag");
         }
-        self.lines = line_no;
+        if let Some(f) = Format::from_extension(&self.name) {
+            return (f, "extension");
+        }
+        let family =
+            self.acc
+                .first_vertex_family
+                .or(self.acc.first_edge_tag.as_ref().map(|t| t.family));
+        match family {
+            Some(Family::Toro) => (Format::Toro, "tags"),
+            _ => (Format::G2o, "tags"),
+        }
+    }
+
+    /// The dialect: the flag if given; else g2o for `EDGE_SE2` tags and toro-info for
+    /// `EDGE2`/`EDGE` tags, except that TORO-tagged files whose information matrices are all
+    /// positive definite in g2o order but not all in TORO order are read in g2o order, with a
+    /// warning (GTSAM's w20000.txt is such a file, FORMATS.md §8). Files without edges take their
+    /// format's dialect.
+    fn decide_dialect(&self, format: Format, warnings: &mut Vec<Warning>) -> (Dialect, String) {
+        if let Some(d) = self.options.dialect {
+            return (d, "flag".into());
+        }
+        let Some(EdgeTag { family, tag, .. }) = &self.acc.first_edge_tag else {
+            return (format.default_dialect(), format!("{format} format"));
+        };
+        match family {
+            Family::G2o => (Dialect::G2o, format!("{tag} tags")),
+            Family::Toro => {
+                let pd = |d| {
+                    self.acc.edges.iter().position(|e| {
+                        noise_matrix(e.noise.0, d)
+                            .check_positive_definite()
+                            .is_err()
+                    })
+                };
+                match (pd(Dialect::ToroInfo), pd(Dialect::G2o)) {
+                    (Some(bad), None) => {
+                        let line = self.acc.sites[bad].line as usize;
+                        warnings.push(self.warning(
+                            line,
+                            format!(
+                                "{tag} lines hold information in g2o order (I11 I12 I13 I22 I23 I33): in TORO order this matrix is not positive definite, in g2o order every edge's is; reading the file in dialect g2o (pass --dialect toro-info to insist on TORO order)"
+                            ),
+                        ));
+                        (
+                            Dialect::G2o,
+                            format!("{tag} tags, values positive definite only in g2o order"),
+                        )
+                    }
+                    _ => (Dialect::ToroInfo, format!("{tag} tags")),
+                }
+            }
+        }
+    }
+
+    fn check_positive_definite(&self, edges: &[Edge], dialect: Dialect) -> Result<(), ParseError> {
+        for (e, site) in edges.iter().zip(&self.acc.sites) {
+            if let Err(pivot) = e.noise.check_positive_definite() {
+                let what = match dialect.noise() {
+                    crate::graph::NoiseKind::Information => "information",
+                    crate::graph::NoiseKind::Covariance => "covariance",
+                };
+                let other_order = if dialect.toro_order() {
+                    Dialect::G2o
+                } else {
+                    Dialect::ToroInfo
+                };
+                // The same six values as written, read in the other order.
+                let raw = if dialect.toro_order() {
+                    e.noise.to_toro()
+                } else {
+                    e.noise.0
+                };
+                let hint = if noise_matrix(raw, other_order)
+                    .check_positive_definite()
+                    .is_ok()
+                {
+                    if dialect.toro_order() {
+                        " (it is in g2o order: try --dialect g2o)"
+                    } else {
+                        " (it is in TORO order: try --dialect toro-info)"
+                    }
+                } else {
+                    ""
+                };
+                return Err(self.error(
+                    site.line as usize,
+                    site.col_noise as usize,
+                    ParseErrorKind::NotPositiveDefinite {
+                        what,
+                        pivot,
+                        dialect: dialect.name(),
+                        hint,
+                    },
+                ));
+            }
+        }
         Ok(())
+    }
+
+    /// Poses sorted by id, from the vertex lines, or the ids the edges mention (with identity
+    /// poses, to be composed along a spanning tree) when the file has no vertex lines.
+    fn vertex_table(&self) -> Result<(Vec<VertexId>, Vec<Pose2>), ParseError> {
+        if self.acc.vertices.is_empty() {
+            let mut ids: Vec<VertexId> = self
+                .acc
+                .edges
+                .iter()
+                .flat_map(|e| [e.i as VertexId, e.j as VertexId])
+                .collect();
+            ids.sort_unstable();
+            ids.dedup();
+            let poses = vec![Pose2::IDENTITY; ids.len()];
+            return Ok((ids, poses));
+        }
+        let mut order: Vec<usize> = (0..self.acc.vertices.len()).collect();
+        order.sort_by_key(|&k| (self.acc.vertices[k].id, self.acc.vertices[k].line));
+        // The duplicate declared earliest in the file is reported.
+        let duplicate = order
+            .windows(2)
+            .filter(|w| self.acc.vertices[w[0]].id == self.acc.vertices[w[1]].id)
+            .min_by_key(|w| self.acc.vertices[w[1]].line);
+        if let Some(w) = duplicate {
+            let (first, second) = (&self.acc.vertices[w[0]], &self.acc.vertices[w[1]]);
+            return Err(self.error(
+                second.line,
+                second.col,
+                ParseErrorKind::DuplicateVertex {
+                    id: second.id,
+                    first_line: first.line,
+                },
+            ));
+        }
+        Ok(order
+            .iter()
+            .map(|&k| (self.acc.vertices[k].id, self.acc.vertices[k].pose))
+            .unzip())
+    }
+}
+
+/// Appends `b` to `a`, taking `b`'s buffer when `a` is empty (the usual case of a file that fits
+/// in one chunk).
+fn extend<T>(a: &mut Vec<T>, mut b: Vec<T>) {
+    if a.is_empty() {
+        *a = b;
+    } else {
+        a.append(&mut b);
+    }
+}
+
+fn mixed_tags(first: &EdgeTag, tag: &str) -> ParseErrorKind {
+    ParseErrorKind::MixedTags {
+        first: first.tag.clone(),
+        first_line: first.line,
+        tag: tag.to_string(),
+    }
+}
+
+fn make_error(name: &str, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
+    ParseError {
+        location: Location {
+            path: name.to_string(),
+            line,
+            col,
+        },
+        kind,
+    }
+}
+
+impl BlockParser<'_> {
+    fn error(&self, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
+        make_error(self.name, line, col, kind)
+    }
+
+    /// The hot path: a well-formed vertex or edge line in one pass over its bytes. Returns false,
+    /// having recorded nothing, for any other line or anything unusual in it (the general path
+    /// then reads it, and reports what is wrong).
+    fn fast_line(&mut self, line_no: usize, line: &[u8]) -> bool {
+        let mut s = line;
+        skip_space(&mut s);
+        let tag_col = line.len() - s.len() + 1;
+        let tag_len = s.iter().take_while(|c| !c.is_ascii_whitespace()).count();
+        let (tag, mut s) = s.split_at(tag_len);
+        let col = |s: &[u8]| narrow(line.len() - s.len() + 1);
+        match classify(tag) {
+            Tag::Vertex(family) => {
+                let mut v = [0.0; 3];
+                skip_space(&mut s);
+                let id_col = col(s);
+                let Some(id) = scan_id(&mut s) else {
+                    return false;
+                };
+                for x in &mut v {
+                    skip_space(&mut s);
+                    match scan_f64(&mut s) {
+                        Some(value) => *x = value,
+                        None => return false,
+                    }
+                }
+                skip_space(&mut s);
+                if !s.is_empty() {
+                    return false;
+                }
+                self.block.first_vertex_family.get_or_insert(family);
+                self.block.vertices.push(RawVertex {
+                    id,
+                    pose: Pose2::new(v[0], v[1], v[2]),
+                    line: line_no,
+                    col: id_col as usize,
+                });
+                true
+            }
+            Tag::Edge(family) => {
+                let known = matches!(&self.reference, Some(r) if r.family == family);
+                if !known && self.options.dialect.is_none() {
+                    return false;
+                }
+                skip_space(&mut s);
+                let col_i = col(s);
+                let Some(i) = scan_id(&mut s) else {
+                    return false;
+                };
+                skip_space(&mut s);
+                let col_j = col(s);
+                let Some(j) = scan_id(&mut s) else {
+                    return false;
+                };
+                let mut v = [0.0; 9];
+                let mut col_noise = 0;
+                for (k, x) in v.iter_mut().enumerate() {
+                    skip_space(&mut s);
+                    if k == 3 {
+                        col_noise = col(s);
+                    }
+                    match scan_f64(&mut s) {
+                        Some(value) => *x = value,
+                        None => return false,
+                    }
+                }
+                skip_space(&mut s);
+                if !s.is_empty() || i == j {
+                    return false;
+                }
+                if self.block.first_edge_tag.is_none() {
+                    self.block.first_edge_tag = Some(EdgeTag {
+                        family,
+                        line: line_no,
+                        col: tag_col,
+                        tag: String::from_utf8_lossy(tag).into_owned(),
+                    });
+                }
+                self.block.edges.push(Edge {
+                    i: i as usize,
+                    j: j as usize,
+                    measurement: Pose2::new(v[0], v[1], v[2]),
+                    noise: SymMat3([v[3], v[4], v[5], v[6], v[7], v[8]]),
+                });
+                self.block.sites.push(EdgeSite {
+                    line: narrow(line_no),
+                    col_i,
+                    col_j,
+                    col_noise,
+                });
+                true
+            }
+            _ => false,
+        }
     }
 
     fn line(&mut self, line_no: usize, line: &[u8], fields: &[Field]) -> Result<(), ParseError> {
@@ -217,7 +754,7 @@ impl<'o> Reader<'o> {
                 if self.options.strict {
                     return Err(at_tag(ParseErrorKind::Equiv));
                 }
-                let e = self.equiv.get_or_insert(Skipped {
+                let e = self.block.equiv.get_or_insert(Skipped {
                     first_line: line_no,
                     count: 0,
                 });
@@ -232,9 +769,9 @@ impl<'o> Reader<'o> {
                 if self.options.strict {
                     return Err(at_tag(ParseErrorKind::UnknownTag { tag: name }));
                 }
-                match self.unknown.iter_mut().find(|(t, _)| *t == name) {
+                match self.block.unknown.iter_mut().find(|(t, _)| *t == name) {
                     Some((_, s)) => s.count += 1,
-                    None => self.unknown.push((
+                    None => self.block.unknown.push((
                         name,
                         Skipped {
                             first_line: line_no,
@@ -303,8 +840,8 @@ impl<'o> Reader<'o> {
             self.num(line_no, &a[2])?,
             self.num(line_no, &a[3])?,
         );
-        self.first_vertex_family.get_or_insert(family);
-        self.vertices.push(RawVertex {
+        self.block.first_vertex_family.get_or_insert(family);
+        self.block.vertices.push(RawVertex {
             id,
             pose,
             line: line_no,
@@ -339,29 +876,34 @@ impl<'o> Reader<'o> {
         if i == j {
             return Err(self.error(line_no, a[1].col, ParseErrorKind::SelfLoop { id: i }));
         }
-        match &self.first_edge_tag {
-            None => self.first_edge_tag = Some((family, line_no, fields[0].lossy())),
-            Some((first, first_line, first_tag))
-                if *first != family && self.options.dialect.is_none() =>
-            {
-                return Err(self.error(
-                    line_no,
-                    fields[0].col,
-                    ParseErrorKind::MixedTags {
-                        first: first_tag.clone(),
-                        first_line: *first_line,
-                        tag: fields[0].lossy(),
-                    },
-                ));
+        let here = || EdgeTag {
+            family,
+            line: line_no,
+            col: fields[0].col,
+            tag: fields[0].lossy(),
+        };
+        if self.block.first_edge_tag.is_none() {
+            self.block.first_edge_tag = Some(here());
+        }
+        match &self.reference {
+            None => self.reference = Some(here()),
+            Some(first) if first.family != family && self.options.dialect.is_none() => {
+                let kind = mixed_tags(first, &fields[0].lossy());
+                return Err(self.error(line_no, fields[0].col, kind));
             }
             Some(_) => {}
         }
-        self.edges.push(RawEdge { i, j, z, values });
-        self.sites.push(EdgeSite {
-            line: line_no,
-            col_i: a[0].col,
-            col_j: a[1].col,
-            col_noise: a[5].col,
+        self.block.edges.push(Edge {
+            i: i as usize,
+            j: j as usize,
+            measurement: z,
+            noise: SymMat3(values),
+        });
+        self.block.sites.push(EdgeSite {
+            line: narrow(line_no),
+            col_i: narrow(a[0].col),
+            col_j: narrow(a[1].col),
+            col_noise: narrow(a[5].col),
         });
         Ok(())
     }
@@ -385,243 +927,9 @@ impl<'o> Reader<'o> {
         }
         for f in args {
             let id = self.id(line_no, f)?;
-            self.fixed.push((id, line_no, f.col));
+            self.block.fixed.push((id, line_no, f.col));
         }
         Ok(())
-    }
-
-    fn finish(self) -> Result<(PoseGraph, ReadReport), ParseError> {
-        let (format, format_reason) = self.decide_format();
-        let mut warnings = Vec::new();
-        let declared = !self.vertices.is_empty();
-        let (ids, poses) = self.vertex_table()?;
-        let index = IdIndex::new(&ids);
-
-        let mut edges = Vec::with_capacity(self.edges.len());
-        for (e, site) in self.edges.iter().zip(&self.sites) {
-            let (i, j) = match (index.get(e.i), index.get(e.j)) {
-                (Some(i), Some(j)) => (i, j),
-                (None, _) => {
-                    return Err(self.error(
-                        site.line,
-                        site.col_i,
-                        ParseErrorKind::UndeclaredVertex { id: e.i },
-                    ));
-                }
-                (_, None) => {
-                    return Err(self.error(
-                        site.line,
-                        site.col_j,
-                        ParseErrorKind::UndeclaredVertex { id: e.j },
-                    ));
-                }
-            };
-            edges.push(Edge {
-                i,
-                j,
-                measurement: e.z,
-                noise: SymMat3::IDENTITY,
-            });
-        }
-
-        let mut fixed = Vec::with_capacity(self.fixed.len());
-        for &(id, line, col) in &self.fixed {
-            let k = index
-                .get(id)
-                .ok_or_else(|| self.error(line, col, ParseErrorKind::UnknownFixed { id }))?;
-            if !fixed.contains(&k) {
-                fixed.push(k);
-            }
-        }
-
-        let (dialect, dialect_reason) = self.decide_dialect(format, &mut warnings);
-        for (edge, raw) in edges.iter_mut().zip(&self.edges) {
-            edge.noise = noise_matrix(raw.values, dialect);
-        }
-        if !self.options.allow_indefinite {
-            self.check_positive_definite(&edges, dialect)?;
-        }
-
-        for (tag, s) in &self.unknown {
-            warnings.push(self.warning(
-                s.first_line,
-                format!(
-                    "unknown tag '{tag}': {} skipped (first here)",
-                    plural(s.count, "line")
-                ),
-            ));
-        }
-        if let Some(s) = &self.equiv {
-            warnings.push(self.warning(
-                s.first_line,
-                format!(
-                    "EQUIV (vertex equivalence) is not supported: {} skipped (first here)",
-                    plural(s.count, "line")
-                ),
-            ));
-        }
-        warnings.sort_by_key(|w| w.location.line);
-
-        let mut graph = PoseGraph {
-            ids,
-            poses,
-            edges,
-            fixed,
-            vertices_declared: declared,
-            noise: dialect.noise(),
-        };
-        if !declared {
-            graph.initialize_spanning_tree();
-        }
-        let report = ReadReport {
-            format,
-            format_reason,
-            dialect,
-            dialect_reason,
-            warnings,
-            lines: self.lines,
-        };
-        Ok((graph, report))
-    }
-
-    fn warning(&self, line: usize, message: String) -> Warning {
-        Warning {
-            location: Location {
-                path: self.name.clone(),
-                line,
-                col: 1,
-            },
-            message,
-        }
-    }
-
-    fn decide_format(&self) -> (Format, &'static str) {
-        if let Some(f) = self.options.format {
-            return (f, "flag");
-        }
-        if let Some(f) = Format::from_extension(&self.name) {
-            return (f, "extension");
-        }
-        let family = self
-            .first_vertex_family
-            .or(self.first_edge_tag.as_ref().map(|t| t.0));
-        match family {
-            Some(Family::Toro) => (Format::Toro, "tags"),
-            _ => (Format::G2o, "tags"),
-        }
-    }
-
-    /// The dialect: the flag if given; else g2o for `EDGE_SE2` tags and toro-info for
-    /// `EDGE2`/`EDGE` tags, except that TORO-tagged files whose information matrices are all
-    /// positive definite in g2o order but not all in TORO order are read in g2o order, with a
-    /// warning (GTSAM's w20000.txt is such a file, FORMATS.md §8). Files without edges take their
-    /// format's dialect.
-    fn decide_dialect(&self, format: Format, warnings: &mut Vec<Warning>) -> (Dialect, String) {
-        if let Some(d) = self.options.dialect {
-            return (d, "flag".into());
-        }
-        let Some((family, _, tag)) = &self.first_edge_tag else {
-            return (format.default_dialect(), format!("{format} format"));
-        };
-        match family {
-            Family::G2o => (Dialect::G2o, format!("{tag} tags")),
-            Family::Toro => {
-                let pd = |d| {
-                    self.edges
-                        .iter()
-                        .position(|e| noise_matrix(e.values, d).check_positive_definite().is_err())
-                };
-                match (pd(Dialect::ToroInfo), pd(Dialect::G2o)) {
-                    (Some(bad), None) => {
-                        let line = self.sites[bad].line;
-                        warnings.push(self.warning(
-                            line,
-                            format!(
-                                "{tag} lines hold information in g2o order (I11 I12 I13 I22 I23 I33): in TORO order this matrix is not positive definite, in g2o order every edge's is; reading the file in dialect g2o (pass --dialect toro-info to insist on TORO order)"
-                            ),
-                        ));
-                        (
-                            Dialect::G2o,
-                            format!("{tag} tags, values positive definite only in g2o order"),
-                        )
-                    }
-                    _ => (Dialect::ToroInfo, format!("{tag} tags")),
-                }
-            }
-        }
-    }
-
-    fn check_positive_definite(&self, edges: &[Edge], dialect: Dialect) -> Result<(), ParseError> {
-        for ((e, raw), site) in edges.iter().zip(&self.edges).zip(&self.sites) {
-            if let Err(pivot) = e.noise.check_positive_definite() {
-                let what = match dialect.noise() {
-                    crate::graph::NoiseKind::Information => "information",
-                    crate::graph::NoiseKind::Covariance => "covariance",
-                };
-                let other_order = if dialect.toro_order() {
-                    Dialect::G2o
-                } else {
-                    Dialect::ToroInfo
-                };
-                let hint = if noise_matrix(raw.values, other_order)
-                    .check_positive_definite()
-                    .is_ok()
-                {
-                    if dialect.toro_order() {
-                        " (it is in g2o order: try --dialect g2o)"
-                    } else {
-                        " (it is in TORO order: try --dialect toro-info)"
-                    }
-                } else {
-                    ""
-                };
-                return Err(self.error(
-                    site.line,
-                    site.col_noise,
-                    ParseErrorKind::NotPositiveDefinite {
-                        what,
-                        pivot,
-                        dialect: dialect.name(),
-                        hint,
-                    },
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Poses sorted by id, from the vertex lines, or the ids the edges mention (with identity
-    /// poses, to be composed along a spanning tree) when the file has no vertex lines.
-    fn vertex_table(&self) -> Result<(Vec<VertexId>, Vec<Pose2>), ParseError> {
-        if self.vertices.is_empty() {
-            let mut ids: Vec<VertexId> = self.edges.iter().flat_map(|e| [e.i, e.j]).collect();
-            ids.sort_unstable();
-            ids.dedup();
-            let poses = vec![Pose2::IDENTITY; ids.len()];
-            return Ok((ids, poses));
-        }
-        let mut order: Vec<usize> = (0..self.vertices.len()).collect();
-        order.sort_by_key(|&k| (self.vertices[k].id, self.vertices[k].line));
-        // The duplicate declared earliest in the file is reported.
-        let duplicate = order
-            .windows(2)
-            .filter(|w| self.vertices[w[0]].id == self.vertices[w[1]].id)
-            .min_by_key(|w| self.vertices[w[1]].line);
-        if let Some(w) = duplicate {
-            let (first, second) = (&self.vertices[w[0]], &self.vertices[w[1]]);
-            return Err(self.error(
-                second.line,
-                second.col,
-                ParseErrorKind::DuplicateVertex {
-                    id: second.id,
-                    first_line: first.line,
-                },
-            ));
-        }
-        Ok(order
-            .iter()
-            .map(|&k| (self.vertices[k].id, self.vertices[k].pose))
-            .unzip())
     }
 }
 
