@@ -3,7 +3,6 @@
 use crate::graph::{NoiseKind, PoseGraph, VertexId};
 use crate::io::{Dialect, Format, ReadReport};
 use serde::Serialize;
-use std::collections::HashMap;
 
 /// Counts that describe a graph file. Field names are stable: they are the `--json` keys.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -45,10 +44,6 @@ impl GraphStats {
         let mut odometry = 0;
         let mut backward = 0;
         let mut degree = vec![0usize; ids.len()];
-        let mut pairs: HashMap<(usize, usize), ()> = HashMap::with_capacity(graph.edges.len());
-        let mut exact: HashMap<[u64; 11], ()> = HashMap::with_capacity(graph.edges.len());
-        let mut duplicate = 0;
-        let mut exact_duplicate = 0;
         for e in &graph.edges {
             let (a, b) = (ids[e.i], ids[e.j]);
             if u64::from(b) == u64::from(a) + 1 {
@@ -59,19 +54,8 @@ impl GraphStats {
             }
             degree[e.i] += 1;
             degree[e.j] += 1;
-            if pairs.insert((e.i.min(e.j), e.i.max(e.j)), ()).is_some() {
-                duplicate += 1;
-            }
-            let mut key = [0u64; 11];
-            key[0] = e.i as u64;
-            key[1] = e.j as u64;
-            for (k, v) in e.measurement.values().iter().chain(&e.noise.0).enumerate() {
-                key[k + 2] = v.to_bits();
-            }
-            if exact.insert(key, ()).is_some() {
-                exact_duplicate += 1;
-            }
         }
+        let (duplicate, exact_duplicate) = duplicates(graph);
         let (_, components) = graph.connected_components();
         let (id_min, id_max) = (ids.first().copied(), ids.last().copied());
         let id_gaps = match (id_min, id_max) {
@@ -98,4 +82,37 @@ impl GraphStats {
             fixed: graph.fixed.iter().map(|&k| ids[k]).collect(),
         }
     }
+}
+
+/// Edges joining the same two poses as an earlier edge, and edges identical in every value to an
+/// earlier one (a subset: identical edges join the same poses). Sorting by pose pair groups them.
+fn duplicates(graph: &PoseGraph) -> (usize, usize) {
+    let pair = |k: usize| {
+        let e = &graph.edges[k];
+        (e.i.min(e.j), e.i.max(e.j))
+    };
+    let mut order: Vec<usize> = (0..graph.edges.len()).collect();
+    order.sort_unstable_by_key(|&k| (pair(k), k));
+    let identical = |a: usize, b: usize| {
+        let (e, f) = (&graph.edges[a], &graph.edges[b]);
+        let bits = |e: &crate::graph::Edge| -> Vec<u64> {
+            e.measurement
+                .values()
+                .iter()
+                .chain(&e.noise.0)
+                .map(|v| v.to_bits())
+                .collect()
+        };
+        (e.i, e.j) == (f.i, f.j) && bits(e) == bits(f)
+    };
+    let (mut same_pair, mut exact) = (0, 0);
+    for group in order.chunk_by(|&a, &b| pair(a) == pair(b)) {
+        same_pair += group.len() - 1;
+        for (n, &k) in group.iter().enumerate().skip(1) {
+            if group[..n].iter().any(|&earlier| identical(earlier, k)) {
+                exact += 1;
+            }
+        }
+    }
+    (same_pair, exact)
 }
