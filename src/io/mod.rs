@@ -7,6 +7,7 @@
 //! anything it skips, and exact on output (shortest round-trip floats, so g2o -> TORO -> g2o
 //! gives back every bit).
 
+mod block;
 pub mod g2o;
 pub mod lexer;
 mod reader;

@@ -1,0 +1,479 @@
+//! Parsing the lines of a block of the input: both formats' pose tags are recognized (as GTSAM
+//! does), well-formed vertex and edge lines take a one-pass fast path, everything else the
+//! general path that also reports what is wrong, with its line and column.
+
+use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
+use super::reader::ReadOptions;
+use super::{g2o, toro};
+use crate::error::{Location, ParseError, ParseErrorKind};
+use crate::graph::{Edge, Pose2, SymMat3, VertexId};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Family {
+    G2o,
+    Toro,
+}
+
+enum Tag {
+    Vertex(Family),
+    Edge(Family),
+    Fix,
+    Equiv,
+    ThreeD,
+    Landmark,
+    Prior,
+    Comment,
+    Unknown,
+}
+
+fn classify(tag: &[u8]) -> Tag {
+    let is = |names: &[&str]| names.iter().any(|n| n.as_bytes() == tag);
+    if tag.first() == Some(&b'#') {
+        Tag::Comment
+    } else if tag == g2o::VERTEX.as_bytes() {
+        Tag::Vertex(Family::G2o)
+    } else if tag == g2o::EDGE.as_bytes() {
+        Tag::Edge(Family::G2o)
+    } else if is(toro::VERTEX_TAGS) {
+        Tag::Vertex(Family::Toro)
+    } else if is(toro::EDGE_TAGS) {
+        Tag::Edge(Family::Toro)
+    } else if tag == g2o::FIX.as_bytes() {
+        Tag::Fix
+    } else if tag == toro::EQUIV.as_bytes() {
+        Tag::Equiv
+    } else if is(g2o::THREE_D) || is(toro::THREE_D) {
+        Tag::ThreeD
+    } else if is(g2o::LANDMARK) || is(toro::LANDMARK) {
+        Tag::Landmark
+    } else if is(g2o::PRIOR) {
+        Tag::Prior
+    } else {
+        Tag::Unknown
+    }
+}
+
+pub(super) struct RawVertex {
+    pub(super) id: VertexId,
+    pub(super) pose: Pose2,
+    pub(super) line: usize,
+    pub(super) col: usize,
+}
+
+/// Where an edge line's fields are, for messages after the whole file is read (32-bit to keep
+/// the per-edge memory small; positions beyond 2^32 - 1 are shown as 4294967295).
+pub(super) struct EdgeSite {
+    pub(super) line: u32,
+    pub(super) col_i: u32,
+    pub(super) col_j: u32,
+    pub(super) col_noise: u32,
+}
+
+fn narrow(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+pub(super) struct Skipped {
+    pub(super) first_line: usize,
+    pub(super) count: usize,
+}
+
+/// Where an edge tag first appears.
+#[derive(Debug, Clone)]
+pub(super) struct EdgeTag {
+    pub(super) family: Family,
+    pub(super) line: usize,
+    pub(super) col: usize,
+    pub(super) tag: String,
+}
+
+/// What a run of consecutive lines holds, before ids are resolved.
+#[derive(Default)]
+pub(super) struct Block {
+    pub(super) vertices: Vec<RawVertex>,
+    /// Edges as read: `i` and `j` hold the file's ids, `noise` the six values in file order
+    /// (both are resolved in [`Reader::finish`], in place).
+    pub(super) edges: Vec<Edge>,
+    pub(super) sites: Vec<EdgeSite>,
+    pub(super) fixed: Vec<(VertexId, usize, usize)>,
+    /// The first edge tag: its family, line and spelling.
+    pub(super) first_edge_tag: Option<EdgeTag>,
+    pub(super) first_vertex_family: Option<Family>,
+    pub(super) unknown: Vec<(String, Skipped)>,
+    pub(super) equiv: Option<Skipped>,
+}
+
+/// Parses the lines of one block.
+struct BlockParser<'a> {
+    name: &'a str,
+    options: &'a ReadOptions,
+    block: Block,
+    /// The file's first edge tag, when known: later edge tags of the other format are an error.
+    reference: Option<EdgeTag>,
+}
+
+/// Parses `bytes`, complete lines whose first is line `first_line` of the file, reserving room
+/// for at least `capacity` vertices and edges.
+pub(super) fn parse_block(
+    name: &str,
+    options: &ReadOptions,
+    bytes: &[u8],
+    first_line: usize,
+    reference: Option<EdgeTag>,
+    capacity: usize,
+) -> Result<Block, ParseError> {
+    // Every line holds at most one vertex or edge: reserving for all of them avoids regrowing
+    // (pages that are reserved but never written cost nothing).
+    let capacity = capacity.max(memchr::memchr_iter(b'\n', bytes).count() + 1);
+    let mut block = Block::default();
+    block.edges.reserve(capacity);
+    block.sites.reserve(capacity);
+    block.vertices.reserve(capacity);
+    let mut p = BlockParser {
+        name,
+        options,
+        block,
+        reference,
+    };
+    // Field storage reused across lines (see `recycle`).
+    let mut spare: Vec<Field<'static>> = Vec::with_capacity(16);
+    let mut line_no = first_line;
+    let mut pos = 0;
+    while pos < bytes.len() {
+        let end = memchr::memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |k| pos + k);
+        let mut line = &bytes[pos..end];
+        if line_no == 1 {
+            line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
+        }
+        if !p.fast_line(line_no, line) {
+            let mut fields = recycle(std::mem::take(&mut spare));
+            split_fields(line, &mut fields);
+            p.line(line_no, line, &fields)?;
+            spare = recycle(fields);
+        }
+        pos = end + 1;
+        line_no += 1;
+    }
+    Ok(p.block)
+}
+
+pub(super) fn mixed_tags(first: &EdgeTag, tag: &str) -> ParseErrorKind {
+    ParseErrorKind::MixedTags {
+        first: first.tag.clone(),
+        first_line: first.line,
+        tag: tag.to_string(),
+    }
+}
+
+pub(super) fn make_error(name: &str, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
+    ParseError {
+        location: Location {
+            path: name.to_string(),
+            line,
+            col,
+        },
+        kind,
+    }
+}
+
+impl BlockParser<'_> {
+    fn error(&self, line: usize, col: usize, kind: ParseErrorKind) -> ParseError {
+        make_error(self.name, line, col, kind)
+    }
+
+    /// The hot path: a well-formed vertex or edge line in one pass over its bytes. Returns false,
+    /// having recorded nothing, for any other line or anything unusual in it (the general path
+    /// then reads it, and reports what is wrong).
+    fn fast_line(&mut self, line_no: usize, line: &[u8]) -> bool {
+        let mut s = line;
+        skip_space(&mut s);
+        let tag_col = line.len() - s.len() + 1;
+        let tag_len = s.iter().take_while(|c| !c.is_ascii_whitespace()).count();
+        let (tag, mut s) = s.split_at(tag_len);
+        let col = |s: &[u8]| narrow(line.len() - s.len() + 1);
+        match classify(tag) {
+            Tag::Vertex(family) => {
+                let mut v = [0.0; 3];
+                skip_space(&mut s);
+                let id_col = col(s);
+                let Some(id) = scan_id(&mut s) else {
+                    return false;
+                };
+                for x in &mut v {
+                    skip_space(&mut s);
+                    match scan_f64(&mut s) {
+                        Some(value) => *x = value,
+                        None => return false,
+                    }
+                }
+                skip_space(&mut s);
+                if !s.is_empty() {
+                    return false;
+                }
+                self.block.first_vertex_family.get_or_insert(family);
+                self.block.vertices.push(RawVertex {
+                    id,
+                    pose: Pose2::new(v[0], v[1], v[2]),
+                    line: line_no,
+                    col: id_col as usize,
+                });
+                true
+            }
+            Tag::Edge(family) => {
+                let known = matches!(&self.reference, Some(r) if r.family == family);
+                if !known && self.options.dialect.is_none() {
+                    return false;
+                }
+                skip_space(&mut s);
+                let col_i = col(s);
+                let Some(i) = scan_id(&mut s) else {
+                    return false;
+                };
+                skip_space(&mut s);
+                let col_j = col(s);
+                let Some(j) = scan_id(&mut s) else {
+                    return false;
+                };
+                let mut v = [0.0; 9];
+                let mut col_noise = 0;
+                for (k, x) in v.iter_mut().enumerate() {
+                    skip_space(&mut s);
+                    if k == 3 {
+                        col_noise = col(s);
+                    }
+                    match scan_f64(&mut s) {
+                        Some(value) => *x = value,
+                        None => return false,
+                    }
+                }
+                skip_space(&mut s);
+                if !s.is_empty() || i == j {
+                    return false;
+                }
+                if self.block.first_edge_tag.is_none() {
+                    self.block.first_edge_tag = Some(EdgeTag {
+                        family,
+                        line: line_no,
+                        col: tag_col,
+                        tag: String::from_utf8_lossy(tag).into_owned(),
+                    });
+                }
+                self.block.edges.push(Edge {
+                    i: i as usize,
+                    j: j as usize,
+                    measurement: Pose2::new(v[0], v[1], v[2]),
+                    noise: SymMat3([v[3], v[4], v[5], v[6], v[7], v[8]]),
+                });
+                self.block.sites.push(EdgeSite {
+                    line: narrow(line_no),
+                    col_i,
+                    col_j,
+                    col_noise,
+                });
+                true
+            }
+            _ => false,
+        }
+    }
+
+    fn line(&mut self, line_no: usize, line: &[u8], fields: &[Field]) -> Result<(), ParseError> {
+        let Some(tag) = fields.first() else {
+            return Ok(());
+        };
+        let tag_name = || tag.lossy();
+        let at_tag = |kind| self.error(line_no, tag.col, kind);
+        match classify(tag.text) {
+            Tag::Comment => Ok(()),
+            Tag::Vertex(family) => self.vertex(line_no, line, fields, family),
+            Tag::Edge(family) => self.edge(line_no, line, fields, family),
+            Tag::Fix => self.fix(line_no, line, fields),
+            Tag::Equiv => {
+                if self.options.strict {
+                    return Err(at_tag(ParseErrorKind::Equiv));
+                }
+                let e = self.block.equiv.get_or_insert(Skipped {
+                    first_line: line_no,
+                    count: 0,
+                });
+                e.count += 1;
+                Ok(())
+            }
+            Tag::ThreeD => Err(at_tag(ParseErrorKind::ThreeD { tag: tag_name() })),
+            Tag::Landmark => Err(at_tag(ParseErrorKind::Landmark { tag: tag_name() })),
+            Tag::Prior => Err(at_tag(ParseErrorKind::Prior { tag: tag_name() })),
+            Tag::Unknown => {
+                let name = tag_name();
+                if self.options.strict {
+                    return Err(at_tag(ParseErrorKind::UnknownTag { tag: name }));
+                }
+                match self.block.unknown.iter_mut().find(|(t, _)| *t == name) {
+                    Some((_, s)) => s.count += 1,
+                    None => self.block.unknown.push((
+                        name,
+                        Skipped {
+                            first_line: line_no,
+                            count: 1,
+                        },
+                    )),
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Checks the number of fields after the tag; a trailing `# comment` is allowed.
+    fn expect_fields<'f, 'a>(
+        &self,
+        line_no: usize,
+        line: &[u8],
+        fields: &'f [Field<'a>],
+        expected: usize,
+        layout: &'static str,
+    ) -> Result<&'f [Field<'a>], ParseError> {
+        let args = &fields[1..];
+        let used = args
+            .iter()
+            .position(|f| f.text.first() == Some(&b'#'))
+            .unwrap_or(args.len());
+        if used == expected {
+            return Ok(&args[..expected]);
+        }
+        let kind = ParseErrorKind::FieldCount {
+            tag: fields[0].lossy(),
+            expected,
+            found: used,
+            layout,
+        };
+        // Too few: point just past the last character; too many: at the first extra field.
+        let col = if used < expected {
+            line.iter()
+                .rposition(|c| !c.is_ascii_whitespace())
+                .map_or(1, |p| p + 2)
+        } else {
+            args[expected].col
+        };
+        Err(self.error(line_no, col, kind))
+    }
+
+    fn num(&self, line_no: usize, f: &Field) -> Result<f64, ParseError> {
+        parse_f64(f).map_err(|k| self.error(line_no, f.col, k))
+    }
+
+    fn id(&self, line_no: usize, f: &Field) -> Result<VertexId, ParseError> {
+        parse_id(f).map_err(|k| self.error(line_no, f.col, k))
+    }
+
+    fn vertex(
+        &mut self,
+        line_no: usize,
+        line: &[u8],
+        fields: &[Field],
+        family: Family,
+    ) -> Result<(), ParseError> {
+        let a = self.expect_fields(line_no, line, fields, 4, "id x y theta")?;
+        let id = self.id(line_no, &a[0])?;
+        let pose = Pose2::new(
+            self.num(line_no, &a[1])?,
+            self.num(line_no, &a[2])?,
+            self.num(line_no, &a[3])?,
+        );
+        self.block.first_vertex_family.get_or_insert(family);
+        self.block.vertices.push(RawVertex {
+            id,
+            pose,
+            line: line_no,
+            col: a[0].col,
+        });
+        Ok(())
+    }
+
+    fn edge(
+        &mut self,
+        line_no: usize,
+        line: &[u8],
+        fields: &[Field],
+        family: Family,
+    ) -> Result<(), ParseError> {
+        let layout = match family {
+            Family::G2o => "i j dx dy dtheta and 6 noise values I11 I12 I13 I22 I23 I33",
+            Family::Toro => "i j dx dy dtheta and 6 noise values ff fs ss rr fr sr",
+        };
+        let a = self.expect_fields(line_no, line, fields, 11, layout)?;
+        let i = self.id(line_no, &a[0])?;
+        let j = self.id(line_no, &a[1])?;
+        let z = Pose2::new(
+            self.num(line_no, &a[2])?,
+            self.num(line_no, &a[3])?,
+            self.num(line_no, &a[4])?,
+        );
+        let mut values = [0.0; 6];
+        for (v, f) in values.iter_mut().zip(&a[5..11]) {
+            *v = self.num(line_no, f)?;
+        }
+        if i == j {
+            return Err(self.error(line_no, a[1].col, ParseErrorKind::SelfLoop { id: i }));
+        }
+        let here = || EdgeTag {
+            family,
+            line: line_no,
+            col: fields[0].col,
+            tag: fields[0].lossy(),
+        };
+        if self.block.first_edge_tag.is_none() {
+            self.block.first_edge_tag = Some(here());
+        }
+        match &self.reference {
+            None => self.reference = Some(here()),
+            Some(first) if first.family != family && self.options.dialect.is_none() => {
+                let kind = mixed_tags(first, &fields[0].lossy());
+                return Err(self.error(line_no, fields[0].col, kind));
+            }
+            Some(_) => {}
+        }
+        self.block.edges.push(Edge {
+            i: i as usize,
+            j: j as usize,
+            measurement: z,
+            noise: SymMat3(values),
+        });
+        self.block.sites.push(EdgeSite {
+            line: narrow(line_no),
+            col_i: narrow(a[0].col),
+            col_j: narrow(a[1].col),
+            col_noise: narrow(a[5].col),
+        });
+        Ok(())
+    }
+
+    fn fix(&mut self, line_no: usize, line: &[u8], fields: &[Field]) -> Result<(), ParseError> {
+        let args: Vec<&Field> = fields[1..]
+            .iter()
+            .take_while(|f| f.text.first() != Some(&b'#'))
+            .collect();
+        if args.is_empty() {
+            return Err(self.error(
+                line_no,
+                line.len() + 1,
+                ParseErrorKind::FieldCount {
+                    tag: "FIX".into(),
+                    expected: 1,
+                    found: 0,
+                    layout: "one or more vertex ids",
+                },
+            ));
+        }
+        for f in args {
+            let id = self.id(line_no, f)?;
+            self.block.fixed.push((id, line_no, f.col));
+        }
+        Ok(())
+    }
+}
+
+/// Empties a vector of fields and hands its allocation to a vector of another lifetime (the
+/// collect of an empty `into_iter().map()` reuses the buffer in place), so the hot loop does not
+/// allocate per line.
+fn recycle<'b>(mut v: Vec<Field<'_>>) -> Vec<Field<'b>> {
+    v.clear();
+    v.into_iter().map(|_| unreachable!()).collect()
+}
