@@ -210,20 +210,10 @@ impl BlockParser<'_> {
                 if !s.is_empty() {
                     return false;
                 }
-                self.block.first_vertex_family.get_or_insert(family);
-                self.block.vertices.push(RawVertex {
-                    id,
-                    pose: Pose2::new(v[0], v[1], v[2]),
-                    line: line_no,
-                    col: id_col as usize,
-                });
+                self.record_vertex(family, id, v, line_no, id_col as usize);
                 true
             }
             Tag::Edge(family) => {
-                let known = matches!(&self.reference, Some(r) if r.family == family);
-                if !known && self.options.dialect.is_none() {
-                    return false;
-                }
                 skip_space(&mut s);
                 let col_i = col(s);
                 let Some(i) = scan_id(&mut s) else {
@@ -247,30 +237,16 @@ impl BlockParser<'_> {
                     }
                 }
                 skip_space(&mut s);
-                if !s.is_empty() || i == j {
-                    return false;
-                }
-                if self.block.first_edge_tag.is_none() {
-                    self.block.first_edge_tag = Some(EdgeTag {
-                        family,
-                        line: line_no,
-                        col: tag_col,
-                        tag: String::from_utf8_lossy(tag).into_owned(),
-                    });
-                }
-                self.block.edges.push(Edge {
-                    i: i as usize,
-                    j: j as usize,
-                    measurement: Pose2::new(v[0], v[1], v[2]),
-                    noise: SymMat3([v[3], v[4], v[5], v[6], v[7], v[8]]),
-                });
-                self.block.sites.push(EdgeSite {
+                let site = EdgeSite {
                     line: narrow(line_no),
                     col_i,
                     col_j,
                     col_noise,
-                });
-                true
+                };
+                s.is_empty()
+                    && self
+                        .record_edge(family, tag, tag_col, i, j, v, site)
+                        .is_ok()
             }
             _ => false,
         }
@@ -372,18 +348,11 @@ impl BlockParser<'_> {
     ) -> Result<(), ParseError> {
         let a = self.expect_fields(line_no, line, fields, 4, "id x y theta")?;
         let id = self.id(line_no, &a[0])?;
-        let pose = Pose2::new(
-            self.num(line_no, &a[1])?,
-            self.num(line_no, &a[2])?,
-            self.num(line_no, &a[3])?,
-        );
-        self.block.first_vertex_family.get_or_insert(family);
-        self.block.vertices.push(RawVertex {
-            id,
-            pose,
-            line: line_no,
-            col: a[0].col,
-        });
+        let mut v = [0.0; 3];
+        for (x, f) in v.iter_mut().zip(&a[1..]) {
+            *x = self.num(line_no, f)?;
+        }
+        self.record_vertex(family, id, v, line_no, a[0].col);
         Ok(())
     }
 
@@ -401,47 +370,82 @@ impl BlockParser<'_> {
         let a = self.expect_fields(line_no, line, fields, 11, layout)?;
         let i = self.id(line_no, &a[0])?;
         let j = self.id(line_no, &a[1])?;
-        let z = Pose2::new(
-            self.num(line_no, &a[2])?,
-            self.num(line_no, &a[3])?,
-            self.num(line_no, &a[4])?,
-        );
-        let mut values = [0.0; 6];
-        for (v, f) in values.iter_mut().zip(&a[5..11]) {
-            *v = self.num(line_no, f)?;
+        let mut v = [0.0; 9];
+        for (x, f) in v.iter_mut().zip(&a[2..]) {
+            *x = self.num(line_no, f)?;
         }
-        if i == j {
-            return Err(self.error(line_no, a[1].col, ParseErrorKind::SelfLoop { id: i }));
-        }
-        let here = || EdgeTag {
-            family,
-            line: line_no,
-            col: fields[0].col,
-            tag: fields[0].lossy(),
-        };
-        if self.block.first_edge_tag.is_none() {
-            self.block.first_edge_tag = Some(here());
-        }
-        match &self.reference {
-            None => self.reference = Some(here()),
-            Some(first) if first.family != family && self.options.dialect.is_none() => {
-                let kind = mixed_tags(first, &fields[0].lossy());
-                return Err(self.error(line_no, fields[0].col, kind));
-            }
-            Some(_) => {}
-        }
-        self.block.edges.push(Edge {
-            i: i as usize,
-            j: j as usize,
-            measurement: z,
-            noise: SymMat3(values),
-        });
-        self.block.sites.push(EdgeSite {
+        let site = EdgeSite {
             line: narrow(line_no),
             col_i: narrow(a[0].col),
             col_j: narrow(a[1].col),
             col_noise: narrow(a[5].col),
+        };
+        let tag = &fields[0];
+        self.record_edge(family, tag.text, tag.col, i, j, v, site)
+    }
+
+    #[inline(always)]
+    fn record_vertex(
+        &mut self,
+        family: Family,
+        id: VertexId,
+        v: [f64; 3],
+        line: usize,
+        col: usize,
+    ) {
+        self.block.first_vertex_family.get_or_insert(family);
+        self.block.vertices.push(RawVertex {
+            id,
+            pose: Pose2::new(v[0], v[1], v[2]),
+            line,
+            col,
         });
+    }
+
+    /// Records an edge `i j dx dy dθ` + six noise values (`v`), after checking it is no
+    /// self-loop and that its tag is of the same format as the file's first edge tag (unless a
+    /// dialect was given); on error nothing is recorded.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn record_edge(
+        &mut self,
+        family: Family,
+        tag: &[u8],
+        tag_col: usize,
+        i: VertexId,
+        j: VertexId,
+        v: [f64; 9],
+        site: EdgeSite,
+    ) -> Result<(), ParseError> {
+        let line = site.line as usize;
+        if i == j {
+            let kind = ParseErrorKind::SelfLoop { id: i };
+            return Err(self.error(line, site.col_j as usize, kind));
+        }
+        let here = || EdgeTag {
+            family,
+            line,
+            col: tag_col,
+            tag: String::from_utf8_lossy(tag).into_owned(),
+        };
+        match &self.reference {
+            None => self.reference = Some(here()),
+            Some(first) if first.family != family && self.options.dialect.is_none() => {
+                let kind = mixed_tags(first, &String::from_utf8_lossy(tag));
+                return Err(self.error(line, tag_col, kind));
+            }
+            Some(_) => {}
+        }
+        if self.block.first_edge_tag.is_none() {
+            self.block.first_edge_tag = Some(here());
+        }
+        self.block.edges.push(Edge {
+            i: i as usize,
+            j: j as usize,
+            measurement: Pose2::new(v[0], v[1], v[2]),
+            noise: SymMat3([v[3], v[4], v[5], v[6], v[7], v[8]]),
+        });
+        self.block.sites.push(site);
         Ok(())
     }
 
