@@ -98,29 +98,25 @@ impl SymMat3 {
         ])
     }
 
-    /// Positive definiteness by Cholesky factorization; `Err(k)` names the first (0-based)
-    /// pivot that is not positive (or not finite).
+    /// Positive definiteness by Cholesky factorization M = L Lᵀ, written out for 3x3;
+    /// `Err(k)` names the first (0-based) pivot that is not positive (or not finite).
     pub fn check_positive_definite(self) -> Result<(), usize> {
-        let m = self.matrix();
-        let mut l = Matrix3::<f64>::zeros();
-        for k in 0..3 {
-            let mut d = m[(k, k)];
-            for p in 0..k {
-                d -= l[(k, p)] * l[(k, p)];
-            }
-            // Rejects NaN too.
-            if d.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !d.is_finite() {
-                return Err(k);
-            }
-            let lkk = d.sqrt();
-            l[(k, k)] = lkk;
-            for r in k + 1..3 {
-                let mut s = m[(r, k)];
-                for p in 0..k {
-                    s -= l[(r, p)] * l[(k, p)];
-                }
-                l[(r, k)] = s / lkk;
-            }
+        // Rejects zero, negative and NaN pivots.
+        let positive =
+            |d: f64| d.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater) && d.is_finite();
+        let [m00, m01, m02, m11, m12, m22] = self.0;
+        if !positive(m00) {
+            return Err(0);
+        }
+        let l00 = m00.sqrt();
+        let (l10, l20) = (m01 / l00, m02 / l00);
+        let d1 = m11 - l10 * l10;
+        if !positive(d1) {
+            return Err(1);
+        }
+        let l21 = (m12 - l20 * l10) / d1.sqrt();
+        if !positive(m22 - l20 * l20 - l21 * l21) {
+            return Err(2);
         }
         Ok(())
     }
