@@ -51,8 +51,6 @@ pub enum ParseErrorKind {
         dialect: &'static str,
         hint: &'static str,
     },
-    #[error("the covariance matrix is singular and cannot be turned into an information matrix")]
-    SingularCovariance,
     #[error("3D pose graphs are not supported (tag {tag}): pgo handles planar SE(2) graphs")]
     ThreeD { tag: String },
     #[error(
@@ -77,8 +75,6 @@ pub enum ParseErrorKind {
         first_line: usize,
         tag: String,
     },
-    #[error("{0}")]
-    Other(String),
 }
 
 /// An input error at a location.
