@@ -257,6 +257,80 @@ impl PoseGraph {
         (label, count)
     }
 
+    /// The connected components as separate graphs (the paper's remark after Assumption 1: a
+    /// graph with k components is k independent problems), with, for each, the dense indices
+    /// of its poses in `self` (ascending) and of its edges (input order). FIX ids go with their
+    /// component.
+    pub fn components(&self) -> Vec<(PoseGraph, Vec<usize>, Vec<usize>)> {
+        let (label, count) = self.connected_components();
+        let mut poses: Vec<Vec<usize>> = vec![Vec::new(); count];
+        for (k, &c) in label.iter().enumerate() {
+            poses[c].push(k);
+        }
+        let mut local = vec![0usize; self.num_poses()];
+        for members in &poses {
+            for (a, &k) in members.iter().enumerate() {
+                local[k] = a;
+            }
+        }
+        let mut edges: Vec<Vec<usize>> = vec![Vec::new(); count];
+        for (k, e) in self.edges.iter().enumerate() {
+            edges[label[e.i]].push(k);
+        }
+        poses
+            .into_iter()
+            .zip(edges)
+            .enumerate()
+            .map(|(c, (members, edge_ids))| {
+                let graph = PoseGraph {
+                    ids: members.iter().map(|&k| self.ids[k]).collect(),
+                    poses: members.iter().map(|&k| self.poses[k]).collect(),
+                    edges: edge_ids
+                        .iter()
+                        .map(|&k| {
+                            let e = self.edges[k];
+                            Edge {
+                                i: local[e.i],
+                                j: local[e.j],
+                                ..e
+                            }
+                        })
+                        .collect(),
+                    fixed: self
+                        .fixed
+                        .iter()
+                        .filter(|&&k| label[k] == c)
+                        .map(|&k| local[k])
+                        .collect(),
+                    vertices_declared: self.vertices_declared,
+                    noise: self.noise,
+                };
+                (graph, members, edge_ids)
+            })
+            .collect()
+    }
+
+    /// Whether the graph is a forest: no cycles, parallel edges included (Prop. 1).
+    pub fn is_forest(&self) -> bool {
+        let (_, count) = self.connected_components();
+        self.edges.len() + count == self.num_poses()
+    }
+
+    /// Whether the measurements compose to the identity along every cycle (Definition 1), to
+    /// within `tolerance` (metres and radians): the poses composed along a spanning tree then
+    /// explain every edge.
+    pub fn is_balanced(&self, tolerance: f64) -> bool {
+        let mut tree = self.clone();
+        tree.initialize_spanning_tree();
+        self.edges.iter().all(|e| {
+            let rel = tree.poses[e.i]
+                .to_isometry()
+                .inv_mul(&tree.poses[e.j].to_isometry());
+            let d = e.measurement.to_isometry().inv_mul(&rel);
+            d.translation.vector.norm() <= tolerance && d.rotation.angle().abs() <= tolerance
+        })
+    }
+
     /// Initial poses composed along a breadth-first spanning tree of each component, rooted at
     /// the component's smallest id (placed at the origin): x_j = x_i · z for an edge i -> j met
     /// forwards, x_i = x_j · z⁻¹ met backwards. Neighbours are visited in edge input order, so the
@@ -387,6 +461,39 @@ mod tests {
         assert!((p[1].theta - FRAC_PI_2).abs() < 1e-15);
         assert!((p[2].x + 1.0).abs() < 1e-15 && p[2].y.abs() < 1e-15);
         assert!((p[2].theta - FRAC_PI_2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn components_split_and_keep_their_edges() {
+        let mut g = graph(
+            5,
+            &[
+                (0, 1, Pose2::new(1.0, 0.0, 0.0)),
+                (3, 4, Pose2::new(2.0, 0.0, 0.0)),
+                (1, 0, Pose2::new(-1.0, 0.0, 0.0)),
+            ],
+        );
+        g.ids = vec![10, 11, 12, 13, 14];
+        g.fixed = vec![3];
+        let parts = g.components();
+        assert_eq!(parts.len(), 3);
+        let (a, poses, edges) = &parts[0];
+        assert_eq!(
+            (a.ids.clone(), poses.clone(), edges.clone()),
+            (vec![10, 11], vec![0, 1], vec![0, 2])
+        );
+        assert_eq!((a.edges[1].i, a.edges[1].j), (1, 0));
+        let (c, _, edges) = &parts[2];
+        assert_eq!(
+            (c.ids.clone(), edges.clone(), c.fixed.clone()),
+            (vec![13, 14], vec![1], vec![0])
+        );
+        assert!(!g.is_forest()); // 0-1 twice: a cycle of parallel edges
+        assert!(g.is_balanced(1e-12)); // but they agree
+        g.edges[2].measurement.x = -1.5;
+        assert!(!g.is_balanced(1e-12));
+        g.edges.pop();
+        assert!(g.is_forest());
     }
 
     #[test]

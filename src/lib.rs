@@ -19,11 +19,20 @@
 //! - [`stats`]: what `pgo-convert --stats` reports;
 //! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them).
 
+pub mod algorithm1;
+pub mod certify;
 pub mod cli;
 pub mod error;
+pub mod gauss_newton;
 pub mod graph;
 pub mod io;
+pub mod matrix;
+pub mod nullspace;
+pub mod sdp;
+pub mod simulate;
+pub mod spectrum;
 pub mod stats;
+pub mod weights;
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};

@@ -12,6 +12,9 @@ use std::process::{Command, Stdio};
 fn tool(name: &str) -> &'static str {
     match name {
         "pgo-convert" => env!("CARGO_BIN_EXE_pgo-convert"),
+        "pgo-simulate" => env!("CARGO_BIN_EXE_pgo-simulate"),
+        "pgo-solve" => env!("CARGO_BIN_EXE_pgo-solve"),
+        "pgo-spectrum" => env!("CARGO_BIN_EXE_pgo-spectrum"),
         other => panic!("unknown tool {other} in tests/golden/cases.txt"),
     }
 }

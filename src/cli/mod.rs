@@ -2,14 +2,23 @@
 //! their entry points. Exit status: 0 success, 1 a negative answer (e.g. not certified), 2 an
 //! error in the input or the request (DESIGN.md §4).
 
+pub mod common;
 pub mod convert;
+pub mod simulate;
+pub mod solve;
+pub mod spectrum;
 
 use std::process::ExitCode;
 
 /// The clap definition of every tool, for man pages and shell completions.
 pub fn commands() -> Vec<clap::Command> {
     use clap::CommandFactory;
-    vec![convert::Args::command()]
+    vec![
+        convert::Args::command(),
+        solve::Args::command(),
+        spectrum::Args::command(),
+        simulate::Args::command(),
+    ]
 }
 
 /// Exit status for errors in the input or the request.

@@ -1,0 +1,12 @@
+complete -c pgo-simulate -s n -l poses -d 'Number of poses (ids 0..N-1)' -r
+complete -c pgo-simulate -l loop-probability -d 'Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently' -r
+complete -c pgo-simulate -l rotation-noise -d 'Rotation noise e_R: gaussian:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi])' -r
+complete -c pgo-simulate -l translation-noise -d 'Translation noise e_Delta: gaussian:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform:HALFWIDTH (uniform in [-HALFWIDTH, HALFWIDTH]^2)' -r
+complete -c pgo-simulate -l seed -d 'Seed of the random number generator (any 64-bit unsigned integer)' -r
+complete -c pgo-simulate -l side -d 'Side L of the square the positions are drawn from, in metres' -r
+complete -c pgo-simulate -s o -l output -d 'Output file, or - for stdout' -r
+complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s extension (.g2o, .graph), else g2o]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-simulate -s q -l quiet -d 'Do not print the summary line on stderr'
+complete -c pgo-simulate -s h -l help -d 'Print help (see more with \'--help\')'
+complete -c pgo-simulate -s V -l version -d 'Print version'

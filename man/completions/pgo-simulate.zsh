@@ -1,0 +1,48 @@
+#compdef pgo-simulate
+
+autoload -U is-at-least
+
+_pgo-simulate() {
+    typeset -A opt_args
+    typeset -a _arguments_options
+    local ret=1
+
+    if is-at-least 5.2; then
+        _arguments_options=(-s -S -C)
+    else
+        _arguments_options=(-s -C)
+    fi
+
+    local context curcontext="$curcontext" state line
+    _arguments "${_arguments_options[@]}" : \
+'-n+[Number of poses (ids 0..N-1)]:N:_default' \
+'--poses=[Number of poses (ids 0..N-1)]:N:_default' \
+'--loop-probability=[Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently]:P:_default' \
+'--rotation-noise=[Rotation noise e_R\: gaussian\:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi\])]:SPEC:_default' \
+'--translation-noise=[Translation noise e_Delta\: gaussian\:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform\:HALFWIDTH (uniform in \[-HALFWIDTH, HALFWIDTH\]^2)]:SPEC:_default' \
+'--seed=[Seed of the random number generator (any 64-bit unsigned integer)]:S:_default' \
+'--side=[Side L of the square the positions are drawn from, in metres]:L:_default' \
+'-o+[Output file, or - for stdout]:OUT:_default' \
+'--output=[Output file, or - for stdout]:OUT:_default' \
+'--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'-q[Do not print the summary line on stderr]' \
+'--quiet[Do not print the summary line on stderr]' \
+'-h[Print help (see more with '\''--help'\'')]' \
+'--help[Print help (see more with '\''--help'\'')]' \
+'-V[Print version]' \
+'--version[Print version]' \
+&& ret=0
+}
+
+(( $+functions[_pgo-simulate_commands] )) ||
+_pgo-simulate_commands() {
+    local commands; commands=()
+    _describe -t commands 'pgo-simulate commands' commands "$@"
+}
+
+if [ "$funcstack[1]" = "_pgo-simulate" ]; then
+    _pgo-simulate "$@"
+else
+    compdef _pgo-simulate pgo-simulate
+fi

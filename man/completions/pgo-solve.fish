@@ -1,0 +1,21 @@
+complete -c pgo-solve -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-solve -l dialect -d 'How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]' -r -f -a "g2o\t'Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM\'s readG2o)'
+toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
+toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
+g2o-cov\t'Covariance, g2o order'"
+complete -c pgo-solve -s o -l output -d 'Write the optimized graph here (- for stdout); with --json the graph goes only here' -r
+complete -c pgo-solve -l to -d 'Output format [default: from the output\'s extension, else the input format]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-solve -l weights -d 'Edge weights: unit (the paper\'s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)' -r -f -a "unit\t'τ = κ = 1: exactly the paper\'s cost (5)/(8)'
+isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)'"
+complete -c pgo-solve -l method -d 'Solution method: sdp (the paper\'s Algorithm 1, for graphs up to 2000 poses)' -r -f -a "sdp\t'Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method'"
+complete -c pgo-solve -l solver -d 'SDP solver for the dual' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'
+clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`)'"
+complete -c pgo-solve -l tol -d 'Relative suboptimality bound under which the result is called certified' -r
+complete -c pgo-solve -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
+complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
+complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
+complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'
+complete -c pgo-solve -s h -l help -d 'Print help (see more with \'--help\')'
+complete -c pgo-solve -s V -l version -d 'Print version'

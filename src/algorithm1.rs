@@ -1,0 +1,212 @@
+//! The paper's Algorithm 1 (Sec. 5.3) for small graphs: solve the dual SDP (31), test the single
+//! zero eigenvalue property (SZEP, Prop. 10) of the penalized pose graph matrix W̃(λ*), and
+//! - SZEP: scale the eigenvector of the zero eigenvalue (Sec. 5.1, Corollary 1): the optimum,
+//!   proven by the dual bound;
+//! - otherwise: the null-space method (46) (Sec. 5.2), a possibly suboptimal estimate, with the
+//!   dual bound still bounding its suboptimality.
+//!
+//! Also the paper's comparison roundings (Sec. 5.2, Sec. 6): the eigenvector method (Eig) and
+//! rank-1 rounding of the SDP relaxation (37) (SDP). Every rounding yields unit-modulus
+//! rotations; positions are then the best ones for those rotations, ρ̃ = −L⁻¹S̃r̃ (in the SZEP
+//! case they equal the scaled eigenvector's; otherwise this can only lower the cost).
+//! A graph with several connected components is solved component by component (the paper's
+//! remark after Assumption 1).
+
+use crate::certify::dual_bound;
+use crate::error::Error;
+use crate::graph::{Pose2, PoseGraph};
+use crate::matrix::{PoseGraphMatrix, cost, rotation};
+use crate::sdp::{DualSolution, SdpError};
+use crate::spectrum::{hermitian_eigen, near_zero, zero_threshold};
+use crate::weights::EdgeWeight;
+use faer::{Mat, c64};
+use std::time::Instant;
+
+/// Which SDP solver solves the dual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SdpSolver {
+    /// The dedicated primal-dual interior-point method (default build).
+    Ipm,
+    /// clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`).
+    Clarabel,
+}
+
+/// Solves the reduced dual SDP of M with the chosen solver.
+pub fn solve_dual(m: &Mat<c64>, solver: SdpSolver) -> Result<DualSolution, SdpError> {
+    match solver {
+        SdpSolver::Ipm => {
+            // A relative gap of 1e-10 is out of reach in double precision on badly scaled
+            // graphs (d* far below the entries of M); accept 1e-8, then 1e-6 there. The bound
+            // reported is proven for whatever λ is returned (see crate::certify).
+            let mut result = Err(SdpError::InvalidInput);
+            for tolerance in [1e-10, 1e-8, 1e-6] {
+                let options = crate::sdp::ipm::IpmOptions {
+                    tolerance,
+                    ..Default::default()
+                };
+                result = crate::sdp::ipm::solve(m.as_ref(), &options);
+                if !matches!(result, Err(SdpError::NotConverged { .. })) {
+                    break;
+                }
+            }
+            result
+        }
+        #[cfg(feature = "clarabel-sdp")]
+        SdpSolver::Clarabel => crate::sdp::clarabel::solve(m.as_ref()),
+        #[cfg(not(feature = "clarabel-sdp"))]
+        SdpSolver::Clarabel => Err(SdpError::Solver(
+            "this build has no clarabel SDP solver (build with --features clarabel-sdp)".into(),
+        )),
+    }
+}
+
+/// How an estimate was obtained from the dual solution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Rounding {
+    /// Sec. 5.1: the scaled eigenvector of the single zero eigenvalue.
+    SzepEigenvector,
+    /// Sec. 5.2, eq. (46): the null-space method.
+    NullSpace,
+    /// Sec. 5.2: the eigenvector method, normalized entry by entry (Eig).
+    Eigenvector,
+    /// Sec. 6: rank-1 rounding of the SDP relaxation's X* (SDP).
+    SdpRank1,
+}
+
+/// Algorithm 1 on one connected graph.
+#[derive(Debug, Clone)]
+pub struct ComponentSolution {
+    /// The estimate, in the input's gauge (pose 0 where the input has it).
+    pub poses: Vec<Pose2>,
+    /// f at the estimate.
+    pub cost: f64,
+    /// A proven lower bound on f* (from λ*, see [`crate::certify`]).
+    pub lower_bound: f64,
+    /// d* = Σλ*, as the solver returned it.
+    pub dual_objective: f64,
+    pub lambda: Vec<f64>,
+    /// Eigenvalues of W̃(λ*), ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Eigenvalues at zero (see [`crate::spectrum::ZERO_TOLERANCE`]).
+    pub near_zero: usize,
+    pub szep: bool,
+    pub rounding: Rounding,
+    /// The dual SDP's solution (with X* for SDP rounding).
+    pub dual: DualSolution,
+    pub sdp_seconds: f64,
+    /// The matrix, for further roundings.
+    pub matrix: PoseGraphMatrix,
+}
+
+/// Runs Algorithm 1 on a connected graph.
+pub fn solve_connected(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    solver: SdpSolver,
+) -> Result<ComponentSolution, Error> {
+    let matrix = PoseGraphMatrix::new(graph, weights);
+    let m = matrix
+        .rotation_matrix()
+        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
+    let t = Instant::now();
+    let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
+    let sdp_seconds = t.elapsed().as_secs_f64();
+    let bound = dual_bound(&matrix, &dual.lambda)
+        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
+    let threshold = zero_threshold(&matrix);
+    let zeros = near_zero(&bound.eigenvalues, threshold);
+    // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
+    let szep = zeros <= 1;
+    let n = graph.num_poses();
+    let rotations: Vec<c64> = if szep {
+        (0..n).map(|k| bound.eigenvectors[(n - 1 + k, 0)]).collect()
+    } else {
+        let basis = Mat::from_fn(matrix.dim(), zeros, |r, c| bound.eigenvectors[(r, c)]);
+        let x = crate::nullspace::null_space_method(basis.as_ref(), n - 1..2 * n - 1)
+            .map_err(|e| Error::Invalid(e.to_string()))?;
+        x[n - 1..].to_vec()
+    };
+    let rounding = if szep {
+        Rounding::SzepEigenvector
+    } else {
+        Rounding::NullSpace
+    };
+    let poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    Ok(ComponentSolution {
+        cost: cost(graph, weights, &poses),
+        poses,
+        lower_bound: bound.lower_bound,
+        dual_objective: dual.dual_objective,
+        lambda: dual.lambda.clone(),
+        eigenvalues: bound.eigenvalues,
+        near_zero: zeros,
+        szep,
+        rounding,
+        dual,
+        sdp_seconds,
+        matrix,
+    })
+}
+
+/// Poses from (unnormalized) rotation entries: each rotation normalized to unit modulus, the
+/// positions optimal for them (ρ̃ = −L⁻¹S̃r̃), then the whole estimate moved rigidly so that
+/// pose 0 is `anchor` (f is invariant to that). A zero entry becomes the rotation 1.
+pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose2) -> Vec<Pose2> {
+    let unit: Vec<c64> = r
+        .iter()
+        .map(|z| {
+            let m = z.norm();
+            if m > 0.0 && m.is_finite() {
+                z / m
+            } else {
+                c64::new(1.0, 0.0)
+            }
+        })
+        .collect();
+    let rho = matrix
+        .optimal_positions(&unit)
+        .expect("the graph is connected");
+    let x: Vec<c64> = rho.into_iter().chain(unit).collect();
+    let poses = matrix.poses(&x);
+    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 = 0 to the anchor's.
+    let phi = anchor.theta - poses[0].theta;
+    let turn = rotation(phi);
+    let mut moved: Vec<Pose2> = poses
+        .iter()
+        .map(|p| {
+            let q = turn * c64::new(p.x, p.y);
+            Pose2::new(anchor.x + q.re, anchor.y + q.im, p.theta + phi)
+        })
+        .collect();
+    // Exactly, not up to the rounding of θ_0 + φ.
+    moved[0] = anchor;
+    moved
+}
+
+/// The comparison roundings of Sec. 5.2 and Sec. 6 from a solved component: the eigenvector
+/// method (Eig) and rank-1 rounding of X* (SDP).
+pub fn comparison_estimate(
+    solution: &ComponentSolution,
+    method: Rounding,
+    anchor: Pose2,
+) -> Vec<Pose2> {
+    let matrix = &solution.matrix;
+    let n = matrix.n;
+    let rotations: Vec<c64> = match method {
+        Rounding::SdpRank1 => {
+            // X* ≈ σ₁ u₁u₁*: the rotations are √σ₁ u₁ (positions are re-solved anyway).
+            let (values, vectors) = hermitian_eigen(&solution.dual.x);
+            let top = values.len() - 1;
+            let s = values[top].max(0.0).sqrt();
+            (0..n).map(|k| vectors[(k, top)] * s).collect()
+        }
+        _ => {
+            let penalized = matrix.penalized_dense(&solution.lambda);
+            let (_, vectors) = hermitian_eigen(&penalized);
+            (0..n).map(|k| vectors[(n - 1 + k, 0)]).collect()
+        }
+    };
+    estimate_from_rotations(matrix, &rotations, anchor)
+}

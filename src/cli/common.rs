@@ -1,0 +1,95 @@
+//! Flags and helpers shared by the tools that read a graph and compute on it.
+
+use crate::error::Error;
+use crate::graph::PoseGraph;
+use crate::io::{self, Dialect, Format, ReadOptions, ReadReport};
+use crate::weights::Weights;
+use clap::Args;
+
+/// How to read the input graph.
+#[derive(Debug, Clone, Args)]
+pub struct InputArgs {
+    /// Input file, or - for stdin
+    #[arg(value_name = "IN")]
+    pub input: String,
+
+    /// Input format [default: from the extension (.g2o, .graph), else from the tags]
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub from: Option<Format>,
+
+    /// How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags,
+    /// toro-info for EDGE2/EDGE tags]
+    #[arg(long, value_enum, value_name = "DIALECT")]
+    pub dialect: Option<Dialect>,
+
+    /// Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning
+    #[arg(long)]
+    pub strict: bool,
+
+    /// Accept noise matrices that are not positive definite (only with --weights unit)
+    #[arg(long)]
+    pub allow_indefinite: bool,
+}
+
+impl InputArgs {
+    /// Reads the graph, printing the reader's warnings.
+    pub fn read(&self) -> crate::Result<(PoseGraph, ReadReport)> {
+        let options = ReadOptions {
+            format: self.from,
+            dialect: self.dialect,
+            strict: self.strict,
+            allow_indefinite: self.allow_indefinite,
+        };
+        let (graph, report) = io::read_path(&self.input, &options)?;
+        crate::cli::print_warnings(&report.warnings);
+        Ok((graph, report))
+    }
+}
+
+/// The `--weights` flag: isotropic weights from the information matrices by default (the
+/// objective of SE-Sync and CPL-SLAM), unit weights for the paper's cost.
+#[derive(Debug, Clone, Args)]
+pub struct WeightArgs {
+    /// Edge weights: unit (the paper's cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)),
+    /// kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)
+    #[arg(long, value_enum, default_value = "isotropic", value_name = "POLICY")]
+    pub weights: Weights,
+}
+
+/// Largest graph the dense (small-graph) computations accept.
+pub const DENSE_MAX_POSES: usize = 2000;
+
+/// Refuses graphs too large for the dense computations, with a message saying so.
+pub fn check_dense_size(graph: &PoseGraph, tool: &str) -> crate::Result<()> {
+    if graph.num_poses() > DENSE_MAX_POSES {
+        return Err(Error::Invalid(format!(
+            "{tool}: {} poses is more than the {DENSE_MAX_POSES} the dense SDP path handles; the scalable solver is not available yet",
+            graph.num_poses()
+        )));
+    }
+    Ok(())
+}
+
+/// Serializes a report as one line of JSON.
+pub fn to_json_line<T: serde::Serialize>(value: &T) -> crate::Result<String> {
+    let mut s = serde_json::to_string(value)
+        .map_err(|e| Error::Invalid(format!("cannot encode the report: {e}")))?;
+    s.push('\n');
+    Ok(s)
+}
+
+/// Writes to stdout, all or nothing.
+pub fn write_stdout(bytes: &[u8]) -> crate::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|_| out.flush())
+        .map_err(|e| Error::io("<stdout>", e))
+}
+
+/// Formats a float for the human-readable reports: shortest round-trip form.
+pub fn num(v: f64) -> String {
+    let mut out = Vec::new();
+    io::format_f64(v, &mut out);
+    String::from_utf8(out).expect("ASCII")
+}

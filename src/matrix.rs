@@ -1,0 +1,431 @@
+//! Pose graph matrices (Sec. 3.2-3.4): the complex anchored pose graph matrix W̃ of eq.
+//! (24)-(25), its blocks L, S̃, Q̃, the real matrix W of eq. (16), the penalized matrix W̃(λ)
+//! of Sec. 4.1, the rotation-only matrix M = Q̃ − S̃* L⁻¹ S̃, and the cost f edge by edge.
+//!
+//! Layout of x̃ = [ρ̃; r̃] ∈ ℂ^{2n−1}: pose 0 (the smallest id) is the anchor, p_0 = 0 (eq. (15));
+//! entries 0..n−1 hold the positions of poses 1..n−1, entries n−1..2n−1 the rotations of poses
+//! 0..n−1. With per-edge weights (τ, κ) ([`crate::weights`]) each edge (i, j) adds
+//!
+//! ```text
+//! τ |p_j − p_i − Δ r_i|² + κ |r_j − R r_i|²,    Δ = dx + i·dy,  R = e^{i·dθ}
+//! ```
+//!
+//! to f = x̃* W̃ x̃ (Prop. 5), i.e. to W̃: τ at (p_i, p_i) and (p_j, p_j), −τ at (p_i, p_j) and
+//! (p_j, p_i), τΔ at (p_i, r_i), −τΔ at (p_j, r_i) (and their conjugates below the diagonal),
+//! τ|Δ|² + κ at (r_i, r_i), κ at (r_j, r_j), −κR at (r_j, r_i), −κR̄ at (r_i, r_j); the rows of
+//! p_0 are dropped (anchoring).
+
+use crate::graph::{Pose2, PoseGraph};
+use crate::weights::EdgeWeight;
+use faer::prelude::*;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side, c64};
+
+/// The complex anchored pose graph matrix W̃ of a graph (eq. (24)).
+#[derive(Debug, Clone)]
+pub struct PoseGraphMatrix {
+    /// Number of poses n.
+    pub n: usize,
+    /// W̃, (2n−1) x (2n−1) Hermitian, both triangles stored.
+    pub w: SparseColMat<usize, c64>,
+}
+
+/// The complex number of a measurement's translation, Δ = dx + i·dy.
+pub fn translation(z: Pose2) -> c64 {
+    c64::new(z.x, z.y)
+}
+
+/// The unit complex number of a rotation angle, e^{iθ}.
+pub fn rotation(theta: f64) -> c64 {
+    c64::new(theta.cos(), theta.sin())
+}
+
+impl PoseGraphMatrix {
+    /// W̃ of `graph` with the given edge weights (one per edge).
+    pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
+        assert_eq!(weights.len(), graph.edges.len(), "one weight per edge");
+        let n = graph.num_poses();
+        assert!(n > 0, "a pose graph matrix needs at least one pose");
+        // Positions of poses 1..n at 0..n-1; pose 0 is anchored and has no row.
+        let p = |k: usize| (k > 0).then(|| k - 1);
+        let r = |k: usize| n - 1 + k;
+        let mut t: Vec<Triplet<usize, usize, c64>> = Vec::with_capacity(16 * graph.edges.len());
+        // An off-diagonal term v at (a, b) and its conjugate at (b, a); a diagonal term once.
+        let mut add = |a: Option<usize>, b: Option<usize>, v: c64| {
+            if let (Some(a), Some(b)) = (a, b) {
+                t.push(Triplet::new(a, b, v));
+                t.push(Triplet::new(b, a, v.conj()));
+            }
+        };
+        for (e, w) in graph.edges.iter().zip(weights) {
+            let (i, j) = (e.i, e.j);
+            let delta = translation(e.measurement);
+            let big_r = rotation(e.measurement.theta);
+            let tau = c64::new(w.tau, 0.0);
+            let kappa = c64::new(w.kappa, 0.0);
+            // Diagonal terms are added as halves of a pair.
+            let half = c64::new(0.5, 0.0);
+            add(p(i), p(i), half * tau);
+            add(p(j), p(j), half * tau);
+            add(p(i), p(j), -tau);
+            add(p(i), Some(r(i)), tau * delta);
+            add(p(j), Some(r(i)), -tau * delta);
+            add(
+                Some(r(i)),
+                Some(r(i)),
+                half * c64::new(w.tau * delta.norm_sqr() + w.kappa, 0.0),
+            );
+            add(Some(r(j)), Some(r(j)), half * kappa);
+            add(Some(r(j)), Some(r(i)), -kappa * big_r);
+        }
+        let dim = 2 * n - 1;
+        let w = SparseColMat::try_new_from_triplets(dim, dim, &t)
+            .expect("indices are within the matrix");
+        PoseGraphMatrix { n, w }
+    }
+
+    /// The dimension 2n − 1 of W̃.
+    pub fn dim(&self) -> usize {
+        2 * self.n - 1
+    }
+
+    /// W̃ as a dense matrix.
+    pub fn dense(&self) -> Mat<c64> {
+        self.w.to_dense()
+    }
+
+    /// The penalized pose graph matrix W̃(λ) = W̃ − blkdiag(0, diag(λ)) (Sec. 4.1), dense.
+    pub fn penalized_dense(&self, lambda: &[f64]) -> Mat<c64> {
+        assert_eq!(lambda.len(), self.n);
+        let mut w = self.dense();
+        for (k, l) in lambda.iter().enumerate() {
+            let d = self.n - 1 + k;
+            w[(d, d)] -= c64::new(*l, 0.0);
+        }
+        w
+    }
+
+    /// The blocks of W̃ = [[L, S̃], [S̃*, Q̃]] (eq. (24)), dense: L is the anchored (weighted)
+    /// Laplacian A^T T A, real; S̃ is (n−1) x n; Q̃ is n x n Hermitian.
+    pub fn blocks(&self) -> (Mat<f64>, Mat<c64>, Mat<c64>) {
+        let w = self.dense();
+        let m = self.n - 1;
+        let l = Mat::from_fn(m, m, |a, b| w[(a, b)].re);
+        let s = Mat::from_fn(m, self.n, |a, b| w[(a, m + b)]);
+        let q = Mat::from_fn(self.n, self.n, |a, b| w[(m + a, m + b)]);
+        (l, s, q)
+    }
+
+    /// The rotation-only matrix M = Q̃ − S̃* L⁻¹ S̃ (the Schur complement of L, eq. (38)): for a
+    /// connected graph L ≻ 0, so W̃(λ) ⪰ 0 iff M − diag(λ) ⪰ 0, with the same number of zero
+    /// eigenvalues, and min over positions of f = r̃* M r̃. `None` if L is not positive definite
+    /// (a disconnected graph).
+    pub fn rotation_matrix(&self) -> Option<Mat<c64>> {
+        let (l, s, q) = self.blocks();
+        if self.n == 1 {
+            return Some(q);
+        }
+        let lc = Mat::from_fn(l.nrows(), l.ncols(), |a, b| c64::new(l[(a, b)], 0.0));
+        let llt = lc.llt(Side::Lower).ok()?;
+        let x = llt.solve(&s);
+        let mut m = &q - s.adjoint() * &x;
+        // Exactly Hermitian: average out rounding.
+        for a in 0..self.n {
+            m[(a, a)] = c64::new(m[(a, a)].re, 0.0);
+            for b in 0..a {
+                let v = (m[(a, b)] + m[(b, a)].conj()) * 0.5;
+                m[(a, b)] = v;
+                m[(b, a)] = v.conj();
+            }
+        }
+        Some(m)
+    }
+
+    /// Positions minimizing f for fixed rotations r̃: ρ̃ = −L⁻¹ S̃ r̃. `None` if L is singular.
+    pub fn optimal_positions(&self, r: &[c64]) -> Option<Vec<c64>> {
+        assert_eq!(r.len(), self.n);
+        let (l, s, _) = self.blocks();
+        if self.n == 1 {
+            return Some(vec![]);
+        }
+        let lc = Mat::from_fn(l.nrows(), l.ncols(), |a, b| c64::new(l[(a, b)], 0.0));
+        let llt = lc.llt(Side::Lower).ok()?;
+        let rv = Mat::from_fn(self.n, 1, |a, _| r[a]);
+        let rho = llt.solve(-(&s * &rv));
+        Some((0..self.n - 1).map(|a| rho[(a, 0)]).collect())
+    }
+
+    /// The real anchored pose graph matrix W of eq. (16): each complex entry a + ib of W̃ becomes
+    /// the 2x2 block [[a, −b], [b, a]] (Prop. 5 and the proof of Prop. 7).
+    pub fn real_dense(&self) -> Mat<f64> {
+        let w = self.dense();
+        let d = self.dim();
+        Mat::from_fn(2 * d, 2 * d, |a, b| {
+            let z = w[(a / 2, b / 2)];
+            match (a % 2, b % 2) {
+                (0, 0) | (1, 1) => z.re,
+                (0, 1) => -z.im,
+                _ => z.im,
+            }
+        })
+    }
+
+    /// x̃ = [ρ̃; r̃] of poses (eq. (20)), anchored at pose 0: ρ̃_k = p_k − p_0 (f is invariant to
+    /// translations), r̃_k = e^{iθ_k}.
+    pub fn state(&self, poses: &[Pose2]) -> Vec<c64> {
+        assert_eq!(poses.len(), self.n);
+        let p0 = c64::new(poses[0].x, poses[0].y);
+        poses[1..]
+            .iter()
+            .map(|p| c64::new(p.x, p.y) - p0)
+            .chain(poses.iter().map(|p| rotation(p.theta)))
+            .collect()
+    }
+
+    /// Poses of a state x̃ = [ρ̃; r̃]: pose 0 at the origin, θ_k = arg r̃_k (any nonzero modulus).
+    pub fn poses(&self, x: &[c64]) -> Vec<Pose2> {
+        assert_eq!(x.len(), self.dim());
+        let m = self.n - 1;
+        (0..self.n)
+            .map(|k| {
+                let p = if k == 0 { c64::new(0.0, 0.0) } else { x[k - 1] };
+                Pose2::new(p.re, p.im, x[m + k].arg())
+            })
+            .collect()
+    }
+
+    /// The quadratic form x̃* W̃ x̃.
+    pub fn quadratic_form(&self, x: &[c64]) -> f64 {
+        assert_eq!(x.len(), self.dim());
+        let mut s = c64::new(0.0, 0.0);
+        for (col, xc) in x.iter().enumerate() {
+            let rows = self.w.symbolic().row_idx_of_col_raw(col);
+            let vals = self.w.val_of_col(col);
+            for (&row, v) in rows.iter().zip(vals) {
+                s += x[row].conj() * v * xc;
+            }
+        }
+        s.re
+    }
+}
+
+/// The cost f of eq. (8) with per-edge weights, summed edge by edge from the poses (no matrix):
+/// Σ τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|².
+pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
+    graph
+        .edges
+        .iter()
+        .zip(weights)
+        .map(|(e, w)| {
+            let (a, b) = (poses[e.i], poses[e.j]);
+            let ri = rotation(a.theta);
+            let t = c64::new(b.x - a.x, b.y - a.y) - ri * translation(e.measurement);
+            let rot = rotation(b.theta) - ri * rotation(e.measurement.theta);
+            w.tau * t.norm_sqr() + w.kappa * rot.norm_sqr()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{Edge, NoiseKind, SymMat3};
+    use crate::weights::{Weights, edge_weights};
+
+    /// A small deterministic generator, so that the tests need no dependency.
+    pub(crate) struct Rng(u64);
+
+    impl Rng {
+        pub(crate) fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        pub(crate) fn range(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    /// A graph with `n` poses: the path 0-1-...-(n-1), plus `extra` (i, j) edges; measurements
+    /// from `truth` composed, perturbed by `noise` (0 gives a balanced graph).
+    pub(crate) fn graph(
+        truth: &[Pose2],
+        extra: &[(usize, usize)],
+        noise: f64,
+        rng: &mut Rng,
+    ) -> PoseGraph {
+        let n = truth.len();
+        let pairs: Vec<(usize, usize)> = (0..n - 1)
+            .map(|k| (k, k + 1))
+            .chain(extra.iter().copied())
+            .collect();
+        let edges = pairs
+            .iter()
+            .map(|&(i, j)| {
+                let z = truth[i].to_isometry().inv_mul(&truth[j].to_isometry());
+                let mut m = Pose2::from_isometry(&z);
+                m.x += noise * rng.range(-1.0, 1.0);
+                m.y += noise * rng.range(-1.0, 1.0);
+                m.theta += noise * rng.range(-1.0, 1.0);
+                Edge {
+                    i,
+                    j,
+                    measurement: m,
+                    noise: SymMat3([2.0, 0.3, 0.1, 3.0, 0.2, 5.0]),
+                }
+            })
+            .collect();
+        PoseGraph {
+            ids: (0..n as u32).collect(),
+            poses: truth.to_vec(),
+            edges,
+            fixed: vec![],
+            vertices_declared: true,
+            noise: NoiseKind::Information,
+        }
+    }
+
+    pub(crate) fn random_poses(n: usize, rng: &mut Rng) -> Vec<Pose2> {
+        (0..n)
+            .map(|_| {
+                Pose2::new(
+                    rng.range(0.0, 10.0),
+                    rng.range(0.0, 10.0),
+                    rng.range(-3.1, 3.1),
+                )
+            })
+            .collect()
+    }
+
+    fn eigenvalues(m: &Mat<c64>) -> Vec<f64> {
+        m.self_adjoint_eigenvalues(Side::Lower).unwrap()
+    }
+
+    #[test]
+    fn prop5_cost_three_ways() {
+        // f edge by edge, x̃* W̃ x̃ (complex), and xᵀ W x (real, eq. (15)) agree at arbitrary
+        // poses, for both weight policies.
+        let mut rng = Rng(7);
+        for (n, noise) in [(2, 0.3), (6, 0.5), (12, 1.0)] {
+            let truth = random_poses(n, &mut rng);
+            let g = graph(&truth, &[(0, n - 1), (1, n / 2)], noise, &mut rng);
+            let eval = random_poses(n, &mut rng);
+            for policy in [Weights::Unit, Weights::Isotropic] {
+                let w = edge_weights(&g, policy).unwrap();
+                let m = PoseGraphMatrix::new(&g, &w);
+                let f = cost(&g, &w, &eval);
+                let x = m.state(&eval);
+                let complex = m.quadratic_form(&x);
+                let xr: Vec<f64> = x.iter().flat_map(|z| [z.re, z.im]).collect();
+                let wr = m.real_dense();
+                let mut real = 0.0;
+                for a in 0..xr.len() {
+                    for b in 0..xr.len() {
+                        real += xr[a] * wr[(a, b)] * xr[b];
+                    }
+                }
+                assert!((f - complex).abs() <= 1e-10 * f.max(1.0), "{f} {complex}");
+                assert!((f - real).abs() <= 1e-10 * f.max(1.0), "{f} {real}");
+            }
+        }
+    }
+
+    #[test]
+    fn prop7_real_spectrum_is_the_complex_one_twice() {
+        let mut rng = Rng(11);
+        let truth = random_poses(7, &mut rng);
+        let g = graph(&truth, &[(0, 6), (2, 5)], 0.4, &mut rng);
+        let w = edge_weights(&g, Weights::Isotropic).unwrap();
+        let m = PoseGraphMatrix::new(&g, &w);
+        let complex = eigenvalues(&m.dense());
+        let real = m
+            .real_dense()
+            .self_adjoint_eigenvalues(Side::Lower)
+            .unwrap();
+        assert_eq!(real.len(), 2 * complex.len());
+        let scale = complex.last().unwrap().abs();
+        for (k, c) in complex.iter().enumerate() {
+            for r in &real[2 * k..2 * k + 2] {
+                assert!((r - c).abs() <= 1e-10 * scale, "{r} vs {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn prop6_single_zero_eigenvalue_iff_balanced_or_tree() {
+        let mut rng = Rng(3);
+        for trial in 0..5 {
+            let n = 5 + trial;
+            let truth = random_poses(n, &mut rng);
+            let cases = [
+                (graph(&truth, &[], 0.5, &mut rng), true), // tree, noisy
+                (graph(&truth, &[(0, n - 1), (1, 3)], 0.0, &mut rng), true), // balanced
+                (graph(&truth, &[(0, n - 1), (1, 3)], 0.3, &mut rng), false), // noisy loops
+            ];
+            for (g, zero) in cases {
+                let w = edge_weights(&g, Weights::Unit).unwrap();
+                let ev = eigenvalues(&PoseGraphMatrix::new(&g, &w).dense());
+                let scale = ev.last().unwrap();
+                let near_zero = ev.iter().filter(|v| v.abs() <= 1e-9 * scale).count();
+                assert_eq!(near_zero, usize::from(zero), "trial {trial}: {ev:?}");
+                if !zero {
+                    assert!(ev[0] > 1e-6 * scale, "{ev:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn props1_11_trees_have_zero_cost_and_zero_multipliers() {
+        // On a tree the measurements composed along it annihilate f (Prop. 1, Appendix 8.1),
+        // and λ = 0 is dual optimal (Prop. 11): W̃(0) = W̃ ⪰ 0 with d(0) = 0 = f*.
+        let mut rng = Rng(5);
+        let truth = random_poses(8, &mut rng);
+        let mut g = graph(&truth, &[], 0.7, &mut rng);
+        g.initialize_spanning_tree();
+        let w = edge_weights(&g, Weights::Isotropic).unwrap();
+        let f = cost(&g, &w, &g.poses);
+        assert!(f < 1e-20, "{f}");
+        let m = PoseGraphMatrix::new(&g, &w);
+        let ev = eigenvalues(&m.penalized_dense(&[0.0; 8]));
+        assert!(ev[0] >= -1e-10 * ev.last().unwrap(), "{ev:?}");
+        // And x̃ of the composed poses spans the kernel: W̃ x̃ = 0 (Theorem 1's certificate).
+        let x = m.state(&g.poses);
+        let scale: f64 = x.iter().map(|v| v.norm_sqr()).sum::<f64>() * ev.last().unwrap();
+        assert!(m.quadratic_form(&x).abs() < 1e-14 * scale);
+    }
+
+    #[test]
+    fn schur_complement_and_optimal_positions() {
+        // min over positions of f(ρ, r) = r* M r, attained at ρ = −L⁻¹ S r.
+        let mut rng = Rng(9);
+        let truth = random_poses(6, &mut rng);
+        let g = graph(&truth, &[(0, 5), (1, 4)], 0.6, &mut rng);
+        let w = edge_weights(&g, Weights::Isotropic).unwrap();
+        let m = PoseGraphMatrix::new(&g, &w);
+        let mm = m.rotation_matrix().unwrap();
+        let r: Vec<c64> = (0..6).map(|_| rotation(rng.range(-3.0, 3.0))).collect();
+        let rho = m.optimal_positions(&r).unwrap();
+        let x: Vec<c64> = rho.iter().chain(&r).copied().collect();
+        let reduced: f64 = (0..6)
+            .flat_map(|a| (0..6).map(move |b| (a, b)))
+            .map(|(a, b)| (r[a].conj() * mm[(a, b)] * r[b]).re)
+            .sum();
+        let full = m.quadratic_form(&x);
+        assert!((reduced - full).abs() <= 1e-10 * full, "{reduced} {full}");
+        // Any other positions cost more.
+        let mut y = x.clone();
+        y[2] += c64::new(0.1, -0.2);
+        assert!(m.quadratic_form(&y) > full);
+        // Same zero-eigenvalue count: both W̃(λ) and M − diag(λ) are singular at the λ that
+        // makes M − diag(λ) singular.
+        let lmin = eigenvalues(&mm)[0];
+        let lambda = vec![lmin; 6];
+        let ew = eigenvalues(&m.penalized_dense(&lambda));
+        assert!(
+            ew[0].abs() < 1e-9 * ew.last().unwrap() && ew[1] > 1e-9,
+            "{ew:?}"
+        );
+    }
+}

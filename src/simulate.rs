@@ -1,0 +1,534 @@
+//! Random planar pose graphs by the measurement model of the paper's simulations (Calafiore,
+//! Carlone and Dellaert, Sec. 6 "Simulation setup", eq. (47)), seeded and reproducible.
+//!
+//! The model:
+//! - `n` poses x_i = (p_i, θ_i): positions uniform in the square [0, side)² (the paper: a
+//!   10 m x 10 m square), headings uniform in (−π, π];
+//! - edges: the spanning path (i, i+1) ("odometric edges"), and a loop closure (i, j) for every
+//!   other pair i < j, j > i + 1, independently with probability P_c (the paper: 0.1);
+//! - measurements, eq. (47):
+//!
+//! ```text
+//! Δ_ij = R_iᵀ (p_j − p_i) + ε_Δ,    ε_Δ ~ N(0₂, σ_Δ² I₂)   (or uniform in [−h, h]²)
+//! R_ij = R_iᵀ R_j R(ε_R),           ε_R ~ N(0, σ_R²)        (or uniform in (−π, π])
+//! ```
+//!
+//!   so the measured angle is θ_ij = wrap(θ_j − θ_i + ε_R), wrapped to (−π, π]. The paper's
+//!   defaults are σ_R = σ_Δ = 0.1; its "uniform" cases are ε_R uniform in (−π, π] and ε_Δ
+//!   uniform in [−5, 5]².
+//!
+//! Every information matrix is the identity, so `--weights unit` (τ = κ = 1) reproduces the
+//! paper's cost (5)/(8) exactly; with zero noise the graph is balanced (every cycle composes to
+//! the identity, up to rounding).
+//!
+//! # Reproducibility
+//!
+//! The random numbers come from this module's own generator, [`Rng`] (xoshiro256** seeded by
+//! SplitMix64), not from a crate whose stream could change with its version. Uniform deviates
+//! are built from the top 53 bits of a draw and normal deviates by the Box-Muller transform, so
+//! the only floating-point functions beyond IEEE-754 arithmetic (+, −, ×, ÷, √, all correctly
+//! rounded) are `ln`, `sin` and `cos` of the standard library. The same seed and configuration
+//! therefore give the same graph, bit for bit, on every platform whose `ln`, `sin` and `cos`
+//! agree (they are the platform's libm; glibc, musl and macOS agree on the arguments that arise
+//! here in practice, which `tests/simulate.rs` pins).
+//!
+//! Three independent streams are derived from the seed (the first twelve SplitMix64 outputs: four
+//! state words each): one for the poses, one for the loop closures, one for the noise. So the
+//! ground truth does not depend on P_c or the noise, and the edge set does not depend on the
+//! noise. Draw order within a stream:
+//! - poses: for i = 0..n: x_i, y_i, θ_i;
+//! - loop closures: for i = 0..n, for j = i+2..n: one uniform u, a loop closure iff u < P_c
+//!   (no draws when P_c is 0 or 1);
+//! - noise: for every edge in output order: ε_Δ (two normals or two uniforms), then ε_R (a normal
+//!   or a uniform). Normals come in Box-Muller pairs; the second of a pair is kept for the next
+//!   normal. Draws happen also when σ = 0, so σ does not shift the stream.
+//!
+//! Edges are written in ascending (i, j) order: after the odometry edge (i, i+1) come the loop
+//! closures (i, j), j > i + 1.
+
+use crate::error::Error;
+use crate::graph::{Edge, MAX_VERTEX_ID, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};
+use std::f64::consts::{PI, TAU};
+use std::fmt;
+use std::str::FromStr;
+
+/// The distribution of the rotation noise ε_R of eq. (47).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RotationNoise {
+    /// ε_R ~ N(0, σ²) (radians).
+    Gaussian { sigma: f64 },
+    /// ε_R uniform in (−π, π]: uninformative rotation measurements.
+    Uniform,
+}
+
+/// The distribution of the translation noise ε_Δ of eq. (47).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TranslationNoise {
+    /// ε_Δ ~ N(0₂, σ² I₂) (metres).
+    Gaussian { sigma: f64 },
+    /// ε_Δ uniform in the square [−h, h]².
+    Uniform { half_width: f64 },
+}
+
+/// What to simulate. [`Default`] is the paper's setup: n = 10, a 10 m square, P_c = 0.1,
+/// σ_R = σ_Δ = 0.1, seed 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimulationConfig {
+    /// Number of poses (ids 0..n−1).
+    pub n: usize,
+    /// Side of the square positions are drawn from, [0, side)².
+    pub side: f64,
+    /// Probability P_c of a loop closure between two poses that are not consecutive.
+    pub loop_probability: f64,
+    pub rotation_noise: RotationNoise,
+    pub translation_noise: TranslationNoise,
+    pub seed: u64,
+}
+
+impl Default for SimulationConfig {
+    fn default() -> Self {
+        SimulationConfig {
+            n: 10,
+            side: 10.0,
+            loop_probability: 0.1,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.1 },
+            seed: 0,
+        }
+    }
+}
+
+impl SimulationConfig {
+    /// Checks every value: n at most 2³¹ (ids must fit g2o's `int`), side finite and positive,
+    /// P_c in [0, 1], σ and h finite and non-negative.
+    pub fn validate(&self) -> crate::Result<()> {
+        let invalid = |m: String| Err(Error::Invalid(m));
+        if self.n > MAX_VERTEX_ID as usize + 1 {
+            return invalid(format!(
+                "n = {} poses: ids must fit g2o's int, at most {}",
+                self.n,
+                MAX_VERTEX_ID as u64 + 1
+            ));
+        }
+        if !(self.side.is_finite() && self.side > 0.0) {
+            return invalid(format!("side = {}: must be a finite number > 0", self.side));
+        }
+        if !(0.0..=1.0).contains(&self.loop_probability) {
+            return invalid(format!(
+                "loop probability = {}: must be in [0, 1]",
+                self.loop_probability
+            ));
+        }
+        if let RotationNoise::Gaussian { sigma } = self.rotation_noise {
+            check_scale("rotation noise sigma", sigma).map_err(Error::Invalid)?;
+        }
+        match self.translation_noise {
+            TranslationNoise::Gaussian { sigma } => {
+                check_scale("translation noise sigma", sigma).map_err(Error::Invalid)?
+            }
+            TranslationNoise::Uniform { half_width } => {
+                check_scale("translation noise half-width", half_width).map_err(Error::Invalid)?
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A simulated problem: the graph (poses = ground truth) and the ground truth itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simulated {
+    /// Ids 0..n−1, `poses` = the ground truth, edges in ascending (i, j) order with identity
+    /// information matrices, no FIX.
+    pub graph: PoseGraph,
+    /// The true poses x_i = (p_i, θ_i), θ_i in (−π, π].
+    pub truth: Vec<Pose2>,
+}
+
+/// Draws a random pose graph by the model of Sec. 6 and eq. (47) (see the module documentation
+/// for the model and the exact draw order).
+///
+/// # Panics
+///
+/// If the configuration is invalid ([`SimulationConfig::validate`]).
+pub fn simulate(config: &SimulationConfig) -> Simulated {
+    if let Err(e) = config.validate() {
+        panic!("invalid simulation configuration: {e}");
+    }
+    let n = config.n;
+    let mut seeder = SplitMix64::new(config.seed);
+    let mut pose_rng = Rng::from_splitmix(&mut seeder);
+    let mut edge_rng = Rng::from_splitmix(&mut seeder);
+    let mut noise_rng = Rng::from_splitmix(&mut seeder);
+
+    let truth: Vec<Pose2> = (0..n)
+        .map(|_| {
+            let x = config.side * pose_rng.uniform();
+            let y = config.side * pose_rng.uniform();
+            let theta = pose_rng.angle();
+            Pose2::new(x, y, theta)
+        })
+        .collect();
+
+    // Topology: the spanning path plus Bernoulli(P_c) loop closures, in ascending (i, j) order.
+    let p = config.loop_probability;
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for i in 0..n {
+        if i + 1 < n {
+            pairs.push((i, i + 1));
+        }
+        if p == 0.0 {
+            continue;
+        }
+        for j in i + 2..n {
+            if p == 1.0 || edge_rng.uniform() < p {
+                pairs.push((i, j));
+            }
+        }
+    }
+
+    let edges = pairs
+        .into_iter()
+        .map(|(i, j)| {
+            let (a, b) = (truth[i], truth[j]);
+            // R_iᵀ (p_j − p_i), R_i = [[c, −s], [s, c]].
+            let (c, s) = (a.theta.cos(), a.theta.sin());
+            let (dx, dy) = (b.x - a.x, b.y - a.y);
+            let (ex, ey) = match config.translation_noise {
+                TranslationNoise::Gaussian { sigma } => {
+                    let (zx, zy) = (noise_rng.normal(), noise_rng.normal());
+                    (sigma * zx, sigma * zy)
+                }
+                TranslationNoise::Uniform { half_width: h } => (
+                    h * (2.0 * noise_rng.uniform() - 1.0),
+                    h * (2.0 * noise_rng.uniform() - 1.0),
+                ),
+            };
+            let e_rot = match config.rotation_noise {
+                RotationNoise::Gaussian { sigma } => sigma * noise_rng.normal(),
+                RotationNoise::Uniform => noise_rng.angle(),
+            };
+            Edge {
+                i,
+                j,
+                measurement: Pose2::new(
+                    c * dx + s * dy + ex,
+                    -s * dx + c * dy + ey,
+                    wrap_angle(b.theta - a.theta + e_rot),
+                ),
+                noise: SymMat3::IDENTITY,
+            }
+        })
+        .collect();
+
+    Simulated {
+        graph: PoseGraph {
+            ids: (0..n).map(|k| k as VertexId).collect(),
+            poses: truth.clone(),
+            edges,
+            fixed: Vec::new(),
+            vertices_declared: true,
+            noise: NoiseKind::Information,
+        },
+        truth,
+    }
+}
+
+/// The angle `a` wrapped to (−π, π] (for finite `a`): `a mod 2π` by the exact IEEE remainder,
+/// then shifted by one turn if needed.
+pub fn wrap_angle(a: f64) -> f64 {
+    let mut w = a % TAU;
+    if w > PI {
+        w -= TAU;
+    } else if w <= -PI {
+        w += TAU;
+    }
+    // `w ∓ TAU` rounds; a result a hair outside the interval lands on the nearer end.
+    if w > PI || w <= -PI { PI } else { w }
+}
+
+fn check_scale(what: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} = {v}: must be a finite number >= 0"))
+    }
+}
+
+fn parse_scale(what: &str, text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{what} '{text}' is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{what} '{text}' must be a finite number >= 0"))
+    }
+}
+
+impl FromStr for RotationNoise {
+    type Err = String;
+
+    /// `gaussian:SIGMA` (σ_R ≥ 0, radians) or `uniform` (uniform in (−π, π]).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            Some(("gaussian", sigma)) => Ok(RotationNoise::Gaussian {
+                sigma: parse_scale("SIGMA", sigma)?,
+            }),
+            None if s == "uniform" => Ok(RotationNoise::Uniform),
+            Some(("uniform", _)) => Err(
+                "'uniform' takes no parameter: rotation noise is uniform in (-pi, pi]".to_string(),
+            ),
+            None if s == "gaussian" => {
+                Err("'gaussian' needs a standard deviation: gaussian:SIGMA".to_string())
+            }
+            _ => Err(format!("expected gaussian:SIGMA or uniform, found '{s}'")),
+        }
+    }
+}
+
+impl FromStr for TranslationNoise {
+    type Err = String;
+
+    /// `gaussian:SIGMA` (σ_Δ ≥ 0, metres) or `uniform:HALFWIDTH` (uniform in [−h, h]²).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            Some(("gaussian", sigma)) => Ok(TranslationNoise::Gaussian {
+                sigma: parse_scale("SIGMA", sigma)?,
+            }),
+            Some(("uniform", h)) => Ok(TranslationNoise::Uniform {
+                half_width: parse_scale("HALFWIDTH", h)?,
+            }),
+            None if s == "gaussian" => {
+                Err("'gaussian' needs a standard deviation: gaussian:SIGMA".to_string())
+            }
+            None if s == "uniform" => Err(
+                "'uniform' needs a half-width: uniform:HALFWIDTH (noise uniform in [-h, h]^2)"
+                    .to_string(),
+            ),
+            _ => Err(format!(
+                "expected gaussian:SIGMA or uniform:HALFWIDTH, found '{s}'"
+            )),
+        }
+    }
+}
+
+impl fmt::Display for RotationNoise {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RotationNoise::Gaussian { sigma } => write!(f, "gaussian:{sigma}"),
+            RotationNoise::Uniform => f.write_str("uniform"),
+        }
+    }
+}
+
+impl fmt::Display for TranslationNoise {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TranslationNoise::Gaussian { sigma } => write!(f, "gaussian:{sigma}"),
+            TranslationNoise::Uniform { half_width } => write!(f, "uniform:{half_width}"),
+        }
+    }
+}
+
+/// SplitMix64 (Steele, Lea and Flood, "Fast splittable pseudorandom number generators", 2014;
+/// Vigna's reference `splitmix64.c`): a Weyl sequence with step 0x9E3779B97F4A7C15 put through a
+/// bijective mixer. Used only to expand a 64-bit seed into xoshiro256** states.
+#[derive(Debug, Clone)]
+pub struct SplitMix64 {
+    state: u64,
+}
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        SplitMix64 { state: seed }
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// xoshiro256** 1.0 (Blackman and Vigna, "Scrambled linear pseudorandom number generators",
+/// 2021; reference `xoshiro256starstar.c`), period 2²⁵⁶ − 1, with the deviates the simulation
+/// needs. Its output depends on integer arithmetic only; see the module documentation for the
+/// floating-point deviates.
+#[derive(Debug, Clone)]
+pub struct Rng {
+    s: [u64; 4],
+    /// The second normal of the last Box-Muller pair, not yet used.
+    spare_normal: Option<f64>,
+}
+
+impl Rng {
+    /// A generator whose state is the next four outputs of `seeder` (never all zero: SplitMix64's
+    /// mixer is a bijection, so at most one of four consecutive outputs is zero).
+    pub fn from_splitmix(seeder: &mut SplitMix64) -> Self {
+        Rng {
+            s: std::array::from_fn(|_| seeder.next_u64()),
+            spare_normal: None,
+        }
+    }
+
+    /// A generator seeded from `seed` through SplitMix64.
+    pub fn new(seed: u64) -> Self {
+        Self::from_splitmix(&mut SplitMix64::new(seed))
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        let s = &mut self.s;
+        let result = s[1].wrapping_mul(5).rotate_left(7).wrapping_mul(9);
+        let t = s[1] << 17;
+        s[2] ^= s[0];
+        s[3] ^= s[1];
+        s[1] ^= s[2];
+        s[0] ^= s[3];
+        s[2] ^= t;
+        s[3] = s[3].rotate_left(45);
+        result
+    }
+
+    /// Uniform in [0, 1): the top 53 bits of a draw times 2⁻⁵³ (exact).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in (−π, π]: π − 2π·u, u uniform in [0, 1).
+    pub fn angle(&mut self) -> f64 {
+        let a = PI - TAU * self.uniform();
+        // 2π·u rounds below 2π for every u < 1, so a > −π; kept as a guard.
+        if a <= -PI { PI } else { a }
+    }
+
+    /// Standard normal by the Box-Muller transform: u₁ in (0, 1], u₂ in [0, 1),
+    /// r = √(−2 ln u₁), z = (r cos 2πu₂, r sin 2πu₂); the second of the pair is returned by the
+    /// next call.
+    pub fn normal(&mut self) -> f64 {
+        if let Some(z) = self.spare_normal.take() {
+            return z;
+        }
+        let u1 = 1.0 - self.uniform();
+        let u2 = self.uniform();
+        let r = (-2.0 * u1.ln()).sqrt();
+        let t = TAU * u2;
+        self.spare_normal = Some(r * t.sin());
+        r * t.cos()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Vigna's reference splitmix64.c from state 0 (also the first values quoted for it in
+    /// many ports).
+    #[test]
+    fn splitmix64_reference_values() {
+        let mut g = SplitMix64::new(0);
+        assert_eq!(g.next_u64(), 0xE220_A839_7B1D_CDAF);
+        assert_eq!(g.next_u64(), 0x6E78_9E6A_A1B9_65F4);
+        assert_eq!(g.next_u64(), 0x06C4_5D18_8009_454F);
+    }
+
+    /// The reference xoshiro256starstar.c from state {1, 2, 3, 4}.
+    #[test]
+    fn xoshiro256starstar_reference_values() {
+        let mut g = Rng {
+            s: [1, 2, 3, 4],
+            spare_normal: None,
+        };
+        let v: Vec<u64> = (0..4).map(|_| g.next_u64()).collect();
+        assert_eq!(v, [11520, 0, 1509978240, 1215971899390074240]);
+    }
+
+    #[test]
+    fn wrap_angle_lands_in_half_open_interval() {
+        assert_eq!(wrap_angle(PI), PI);
+        assert_eq!(wrap_angle(-PI), PI);
+        assert_eq!(wrap_angle(0.0), 0.0);
+        assert_eq!(wrap_angle(TAU), 0.0);
+        assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-15);
+        assert!((wrap_angle(-7.0) - (-7.0 + TAU)).abs() < 1e-15);
+        for k in -1000..=1000 {
+            let w = wrap_angle(k as f64 * 0.37);
+            assert!(w > -PI && w <= PI, "{k}: {w}");
+        }
+    }
+
+    #[test]
+    fn angle_deviates_are_in_half_open_interval() {
+        let mut g = Rng::new(7);
+        for _ in 0..100_000 {
+            let a = g.angle();
+            assert!(a > -PI && a <= PI);
+        }
+    }
+
+    #[test]
+    fn noise_specs_parse_and_print_back() {
+        for s in ["gaussian:0.1", "gaussian:0", "uniform"] {
+            assert_eq!(s.parse::<RotationNoise>().unwrap().to_string(), s);
+        }
+        for s in ["gaussian:0.25", "uniform:5"] {
+            assert_eq!(s.parse::<TranslationNoise>().unwrap().to_string(), s);
+        }
+        for bad in [
+            "gaussian:-1",
+            "gaussian:x",
+            "gaussian",
+            "uniform:1",
+            "laplace:1",
+            "",
+        ] {
+            assert!(bad.parse::<RotationNoise>().is_err(), "{bad}");
+        }
+        for bad in [
+            "gaussian:nan",
+            "uniform",
+            "uniform:-5",
+            "uniform:inf",
+            "cauchy",
+        ] {
+            assert!(bad.parse::<TranslationNoise>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn one_pose_has_no_edges_and_zero_poses_are_fine() {
+        for n in [0, 1] {
+            let s = simulate(&SimulationConfig {
+                n,
+                ..Default::default()
+            });
+            assert_eq!(s.graph.num_poses(), n);
+            assert!(s.graph.edges.is_empty());
+        }
+    }
+
+    #[test]
+    fn certain_loop_closures_give_the_complete_graph() {
+        let s = simulate(&SimulationConfig {
+            n: 7,
+            loop_probability: 1.0,
+            ..Default::default()
+        });
+        let pairs: Vec<(usize, usize)> = s.graph.edges.iter().map(|e| (e.i, e.j)).collect();
+        let all: Vec<(usize, usize)> = (0..7)
+            .flat_map(|i| (i + 1..7).map(move |j| (i, j)))
+            .collect();
+        assert_eq!(pairs, all);
+    }
+
+    #[test]
+    #[should_panic(expected = "loop probability")]
+    fn invalid_probability_panics() {
+        simulate(&SimulationConfig {
+            loop_probability: 1.5,
+            ..Default::default()
+        });
+    }
+}
