@@ -12,6 +12,8 @@
 //! cone (`clarabel` module, behind the `clarabel-sdp` cargo feature, which needs a system
 //! OpenBLAS).
 
+#[cfg(feature = "clarabel-sdp")]
+pub mod clarabel;
 pub mod ipm;
 
 use faer::{Mat, c64};
