@@ -336,3 +336,64 @@ fn disconnected_graphs_are_solved_per_component() {
     assert_eq!(r["near_zero_eigenvalues"], 4);
     assert!(r.get("timings").is_none());
 }
+
+#[test]
+fn reduced_and_full_dual_forms_have_the_same_optimum() {
+    // The SDP is solved in its reduced form on M = Q − S*L⁻¹S. Its λ* is optimal for the full
+    // form (31) too: W(λ*) ⪰ 0 (full dual feasibility), and the full primal (36)
+    // X_full = [[L⁻¹S X S*L⁻¹, −L⁻¹S X], [−X S*L⁻¹, X]] built from the reduced X* is feasible
+    // (PSD, unit diagonal on the rotations) with Tr(W X_full) = Σλ*: zero gap in the full pair.
+    use faer::prelude::*;
+    use faer::{Mat, Side, c64};
+    for seed in 0..5 {
+        let g = simulate(&SimulationConfig {
+            n: 12,
+            seed,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.8 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.5 },
+            loop_probability: 0.3,
+            ..Default::default()
+        })
+        .graph;
+        let s = solve(&g);
+        let n = g.num_poses();
+        let w = s.matrix.dense();
+        let (l, sm, _) = s.matrix.blocks();
+        let lc = Mat::from_fn(n - 1, n - 1, |a, b| c64::new(l[(a, b)], 0.0));
+        let k = lc.llt(Side::Lower).unwrap().solve(&sm); // L⁻¹S
+        let x = &s.dual.x;
+        let kx = &k * x;
+        let top = &kx * k.adjoint();
+        let d = 2 * n - 1;
+        let full = Mat::from_fn(d, d, |a, b| match (a < n - 1, b < n - 1) {
+            (true, true) => top[(a, b)],
+            (true, false) => -kx[(a, b - (n - 1))],
+            (false, true) => -kx[(b, a - (n - 1))].conj(),
+            (false, false) => x[(a - (n - 1), b - (n - 1))],
+        });
+        let scale = w.norm_max();
+        let ev_x = full.self_adjoint_eigenvalues(Side::Lower).unwrap();
+        assert!(
+            ev_x[0] >= -1e-8 * ev_x[d - 1],
+            "X_full not PSD: {}",
+            ev_x[0]
+        );
+        for r in 0..n {
+            assert!((full[(n - 1 + r, n - 1 + r)].re - 1.0).abs() < 1e-9);
+        }
+        let trace: f64 = (0..d)
+            .flat_map(|a| (0..d).map(move |b| (a, b)))
+            .map(|(a, b)| (w[(a, b)] * full[(b, a)]).re)
+            .sum();
+        let dual: f64 = s.lambda.iter().sum();
+        assert!(
+            (trace - dual).abs() <= 1e-7 * dual.abs().max(1.0),
+            "{trace} vs {dual}"
+        );
+        assert!(
+            s.eigenvalues[0] >= -1e-9 * scale,
+            "W(λ*) not PSD: {}",
+            s.eigenvalues[0]
+        );
+    }
+}
