@@ -14,7 +14,7 @@ use pgo::algorithm1::{
     ComponentSolution, Rounding, SdpSolver, comparison_estimate, solve_connected,
 };
 use pgo::gauss_newton::refine;
-use pgo::graph::{Edge, Pose2, PoseGraph};
+use pgo::graph::PoseGraph;
 use pgo::matrix::cost;
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
 use pgo::weights::{Weights, edge_weights};
@@ -282,47 +282,6 @@ fn toy() -> PoseGraph {
         .0
 }
 
-/// The toy graph without pose `k` (0-based): its two edges replaced by their composition.
-fn remove_node(g: &PoseGraph, k: usize) -> PoseGraph {
-    let n = g.num_poses();
-    let (prev, next) = ((k + n - 1) % n, (k + 1) % n);
-    let find = |i: usize, j: usize| {
-        g.edges
-            .iter()
-            .find(|e| e.i == i && e.j == j)
-            .expect("a cycle")
-            .measurement
-    };
-    let composed =
-        Pose2::from_isometry(&(find(prev, k).to_isometry() * find(k, next).to_isometry()));
-    let keep: Vec<usize> = (0..n).filter(|&v| v != k).collect();
-    let index = |v: usize| keep.iter().position(|&u| u == v).unwrap();
-    let mut edges: Vec<Edge> = g
-        .edges
-        .iter()
-        .filter(|e| e.i != k && e.j != k)
-        .map(|e| Edge {
-            i: index(e.i),
-            j: index(e.j),
-            ..*e
-        })
-        .collect();
-    edges.push(Edge {
-        i: index(prev),
-        j: index(next),
-        measurement: composed,
-        noise: g.edges[0].noise,
-    });
-    PoseGraph {
-        ids: keep.iter().map(|&v| g.ids[v]).collect(),
-        poses: keep.iter().map(|&v| g.poses[v]).collect(),
-        edges,
-        fixed: vec![],
-        vertices_declared: true,
-        noise: g.noise,
-    }
-}
-
 fn fig8() {
     let g = toy();
     println!(
@@ -351,7 +310,7 @@ fn fig8() {
         let label = (b'b' + k as u8) as char;
         row(
             format!("({label}) without node {}", k + 1),
-            &remove_node(&g, k),
+            &g.eliminate_pose(k).expect("pose k lies on the cycle"),
         );
     }
 }

@@ -331,6 +331,63 @@ impl PoseGraph {
         })
     }
 
+    /// The graph without pose `k`, whose two edges (h → k) and (k → l) are replaced by their
+    /// composition h → l: the node removal of Sec. 6 (Fig. 8(b)-(f)), which keeps the error
+    /// accumulated along every cycle. `None` unless `k` has exactly those two edges.
+    pub fn eliminate_pose(&self, k: usize) -> Option<PoseGraph> {
+        let incident: Vec<&Edge> = self.edges.iter().filter(|e| e.i == k || e.j == k).collect();
+        let [into, out] = incident[..] else {
+            return None;
+        };
+        let (into, out) = if into.j == k {
+            (into, out)
+        } else {
+            (out, into)
+        };
+        if into.j != k || out.i != k {
+            return None;
+        }
+        let composed =
+            Pose2::from_isometry(&(into.measurement.to_isometry() * out.measurement.to_isometry()));
+        let at = |v: usize| if v > k { v - 1 } else { v };
+        let mut edges: Vec<Edge> = self
+            .edges
+            .iter()
+            .filter(|e| e.i != k && e.j != k)
+            .map(|e| Edge {
+                i: at(e.i),
+                j: at(e.j),
+                ..*e
+            })
+            .collect();
+        edges.push(Edge {
+            i: at(into.i),
+            j: at(out.j),
+            measurement: composed,
+            noise: into.noise,
+        });
+        let keep = |v: &usize| *v != k;
+        Some(PoseGraph {
+            ids: (0..self.num_poses())
+                .filter(keep)
+                .map(|v| self.ids[v])
+                .collect(),
+            poses: (0..self.num_poses())
+                .filter(keep)
+                .map(|v| self.poses[v])
+                .collect(),
+            edges,
+            fixed: self
+                .fixed
+                .iter()
+                .filter(|v| keep(v))
+                .map(|&v| at(v))
+                .collect(),
+            vertices_declared: self.vertices_declared,
+            noise: self.noise,
+        })
+    }
+
     /// Initial poses composed along a breadth-first spanning tree of each component, rooted at
     /// the component's smallest id (placed at the origin): x_j = x_i · z for an edge i -> j met
     /// forwards, x_i = x_j · z⁻¹ met backwards. Neighbours are visited in edge input order, so the

@@ -61,7 +61,7 @@ pub enum NullSpaceError {
 /// x̃ = Ṽ z̃*, all 2n−1 rows.
 ///
 /// The rotation entries of x̃ have modulus at most 1 (the solution is scaled down by the
-/// solver's feasibility error if it exceeds 1, about 1e-8), but are **not normalized**: as in
+/// solver's feasibility error if it exceeds 1, about 1e-10), but are **not normalized**: as in
 /// Algorithm 1, the caller divides each rotation entry by its modulus to get a primal-feasible
 /// (in general suboptimal) estimate. The problem is bounded iff the rotation rows of Ṽ have full
 /// column rank, which holds for a null space of W̃(λ) with a connected graph (a null vector with
@@ -129,9 +129,12 @@ pub fn null_space_method(
 
     // Tighter than clarabel's 1e-8: the optimum of a linear objective over this curved set moves
     // like the square root of the gap, so 1e-8 left x about 1e-5 off (1e-10: about 1e-6, still
-    // `Solved` in about 11 iterations; 1e-12 ends `AlmostSolved`).
+    // `Solved` in about 11 iterations; 1e-12 ends `AlmostSolved`). QDLDL, sequential: the same
+    // result with or without the `clarabel-sdp` feature (which makes faer's LDL available).
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
+        .direct_solve_method("qdldl".to_string())
+        .max_threads(1)
         .tol_gap_abs(1e-10)
         .tol_gap_rel(1e-10)
         .tol_feas(1e-10)
@@ -309,7 +312,7 @@ mod tests {
     }
 
     #[test]
-    fn errors() {
+    fn errors_and_rotation_row_placement() {
         let v = Mat::<c64>::identity(3, 2);
         assert_eq!(
             null_space_method(v.as_ref(), 1..4),
@@ -333,14 +336,16 @@ mod tests {
             null_space_method(nan.as_ref(), 0..3),
             Err(NullSpaceError::NotFinite)
         );
-        // The second basis vector only moves row 0, which is not a rotation row.
+        // The second basis vector only moves row 1, which is not a rotation row.
         let rank_deficient = Mat::<c64>::identity(3, 2);
         assert_eq!(
             null_space_method(rank_deficient.as_ref(), 0..1),
             Err(NullSpaceError::Unbounded)
         );
-        // Rotation rows only in the middle are fine.
-        let x = null_space_method(Mat::<c64>::identity(3, 3).as_ref(), 1..2);
-        assert!(matches!(x, Err(NullSpaceError::Unbounded)));
+        // Rotation rows need not be at the end: q = 1 with row 1 the only rotation row.
+        let v = Mat::from_fn(3, 1, |i, _| c64::new([2.0, 1.0, 3.0][i], 0.0));
+        let x = null_space_method(v.as_ref(), 1..2).unwrap();
+        assert!((x[1].norm() - 1.0).abs() < 1e-6);
+        assert!(close(x[0], x[1] * 2.0, 1e-9) && close(x[2], x[1] * 3.0, 1e-9));
     }
 }

@@ -49,7 +49,7 @@
 //! pair is made exactly feasible, so that both objectives are bounds as for [`super::ipm`]:
 //! X is rescaled to a unit diagonal, X ← D^{-1/2} X D^{-1/2} with D = Diag(X) (still ⪰ 0), and
 //! λ is shifted by the smallest eigenvalue of M − diag(λ) when that is negative (faer's dense
-//! Hermitian eigenvalues). Then `dual_objective` = Σ λ_i ≤ d* = s* ≤ Tr(M X*) =
+//! Hermitian eigenvalues, sequential). Then `dual_objective` = Σ λ_i ≤ d* = s* ≤ Tr(M X*) =
 //! `primal_objective`, to rounding, and their difference is a certified gap.
 //!
 //! # Settings and accuracy
@@ -81,7 +81,10 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use faer::{Mat, MatRef, Side, c64};
+use faer::diag::Diag;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::evd::{self, ComputeEigenvectors};
+use faer::{Mat, MatRef, Par, c64};
 
 use super::{DualSolution, SdpError};
 
@@ -120,6 +123,33 @@ fn is_hermitian(m: MatRef<'_, c64>) -> bool {
     }
     let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
     (0..n).all(|j| (0..=j).all(|i| (m[(i, j)] - m[(j, i)].conj()).norm() <= tol))
+}
+
+/// The smallest eigenvalue of the Hermitian `h` (lower triangle), computed sequentially so
+/// that the result does not depend on faer's global parallelism.
+fn smallest_eigenvalue(h: MatRef<'_, c64>) -> Result<f64, SdpError> {
+    let n = h.nrows();
+    let mut eigenvalues = Diag::<c64>::zeros(n);
+    let scratch = evd::self_adjoint_evd_scratch::<c64>(
+        n,
+        ComputeEigenvectors::No,
+        Par::Seq,
+        Default::default(),
+    );
+    evd::self_adjoint_evd(
+        h,
+        eigenvalues.as_mut(),
+        None,
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| SdpError::Solver(format!("eigenvalues of M − diag(λ): {e:?}")))?;
+    Ok(eigenvalues
+        .column_vector()
+        .iter()
+        .map(|v| v.re)
+        .fold(f64::INFINITY, f64::min))
 }
 
 /// Solves the reduced dual SDP d* = max Σ λ_i s.t. M − diag(λ) ⪰ 0 (the paper's (31) with the
@@ -227,9 +257,7 @@ pub fn solve(m: MatRef<'_, c64>) -> Result<DualSolution, SdpError> {
             herm(i, j)
         }
     });
-    let smallest = slack
-        .self_adjoint_eigenvalues(Side::Lower)
-        .map_err(|e| SdpError::Solver(format!("eigenvalues of M − diag(λ): {e:?}")))?[0];
+    let smallest = smallest_eigenvalue(slack.as_ref())?;
     if smallest < 0.0 {
         lambda.iter_mut().for_each(|l| *l += smallest);
     }
@@ -252,6 +280,7 @@ pub fn solve(m: MatRef<'_, c64>) -> Result<DualSolution, SdpError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::Side;
     use faer::prelude::Solve;
 
     /// SplitMix64: deterministic test data without a dependency.
