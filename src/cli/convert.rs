@@ -1,5 +1,6 @@
 //! `pgo-convert`: g2o <-> TORO conversion, dialects, statistics.
 
+use super::common::{to_json_line, write_stdout};
 use crate::error::Error;
 use crate::graph::NoiseKind;
 use crate::io::{self, Dialect, Format, ReadOptions, WriteOptions};
@@ -127,10 +128,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if args.stats {
         let stats = GraphStats::new(&graph, &report);
         let text = if args.json {
-            let mut s = serde_json::to_string(&stats)
-                .map_err(|e| Error::Invalid(format!("cannot encode statistics: {e}")))?;
-            s.push('\n');
-            s
+            to_json_line(&stats)?
         } else {
             stats_text(&display_name(&args.input, "<stdin>"), &stats, &report)
         };
@@ -186,14 +184,6 @@ fn display_name(path: &str, stdio: &str) -> String {
         "-" => stdio.into(),
         p => p.into(),
     }
-}
-
-fn write_stdout(bytes: &[u8]) -> crate::Result<()> {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    out.write_all(bytes)
-        .and_then(|_| out.flush())
-        .map_err(|e| Error::io("<stdout>", e))
 }
 
 /// The human-readable statistics: one `key: value` per line.
