@@ -89,7 +89,7 @@ pub struct ComponentSolution {
     pub lambda: Vec<f64>,
     /// Eigenvalues of W̃(λ*), ascending.
     pub eigenvalues: Vec<f64>,
-    /// Eigenvalues at zero (see [`crate::spectrum::ZERO_TOLERANCE`]).
+    /// Eigenvalues at zero (see [`crate::spectrum::ZERO_FACTOR`]).
     pub near_zero: usize,
     pub szep: bool,
     pub rounding: Rounding,
@@ -115,7 +115,7 @@ pub fn solve_connected(
     let sdp_seconds = t.elapsed().as_secs_f64();
     let bound = dual_bound(&matrix, &dual.lambda)
         .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
-    let threshold = zero_threshold(&matrix);
+    let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);
     let zeros = near_zero(&bound.eigenvalues, threshold);
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
     let szep = zeros <= 1;

@@ -18,9 +18,10 @@
 //! conservatively (its computed value minus its own error allowance). When μ ≥ ‖E‖, t = 0.
 //!
 //! That t is often pessimistic (‖S̃‖²/λ_min(L)² is large for long chains), so smaller shifts
-//! s = 10^k ‖E‖ are tried directly: if the computed smallest eigenvalue of W̃(λ − s1) is at least
-//! its own allowance, then W̃(λ − s1) ⪰ 0 outright and the bound Σλ − n·s holds. The better of
-//! the two proven bounds is reported.
+//! s are tried directly on the equilibrated matrix D W̃(λ − s1) D (D = diag(W̃_kk^(−1/2)), PSD
+//! exactly when W̃(λ − s1) is): if its computed smallest eigenvalue is at least its own rounding
+//! allowance, W̃(λ − s1) ⪰ 0 outright and the bound Σλ − n·s holds. The better of the two proven
+//! bounds is reported.
 
 use crate::matrix::PoseGraphMatrix;
 use crate::spectrum::{hermitian_eigen, hermitian_eigenvalues};
@@ -71,20 +72,44 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
             .sum();
         beta * (1.0 + s_fro2 / (l_min * l_min))
     };
-    // Direct shifts, cheaper than t when they work.
+    // Direct shifts, cheaper than t when they work. They are tested on the equilibrated matrix
+    // D W̃(λ − s1) D, D = diag(W̃_kk^(-1/2)), which is PSD exactly when W̃(λ − s1) is: its
+    // rounding allowance is relative to entries of order one, so the null vectors of graphs
+    // whose positions dwarf their rotations (metres against unit complex numbers) need no
+    // large shift.
     let mut shift = schur_shift;
     if beta > 0.0 {
-        let base = eigen_error(&penalized);
-        for k in 1..=12 {
-            let s = base * 10f64.powi(k);
-            if s >= shift {
-                break;
-            }
+        let w = matrix.dense();
+        let scale: Vec<f64> = (0..w.nrows())
+            .map(|k| 1.0 / w[(k, k)].re.max(f64::MIN_POSITIVE).sqrt())
+            .collect();
+        let equilibrated = |s: f64| {
             let moved: Vec<f64> = lambda.iter().map(|l| l - s).collect();
             let a = matrix.penalized_dense(&moved);
-            if hermitian_eigenvalues(&a)[0] >= eigen_error(&a) {
-                shift = s;
-                break;
+            Mat::from_fn(a.nrows(), a.ncols(), |r, c| {
+                a[(r, c)] * (scale[r] * scale[c])
+            })
+        };
+        let proves = |s: f64| {
+            let a = equilibrated(s);
+            hermitian_eigenvalues(&a)[0] >= eigen_error(&a)
+        };
+        // The smallest diagonal scale of the rotation block converts an allowance on the
+        // equilibrated matrix into a shift of λ.
+        let r_min = scale[n - 1..].iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let base = eigen_error(&equilibrated(0.0)) / (r_min * r_min);
+        if proves(0.0) {
+            shift = 0.0;
+        } else {
+            for k in 0..=14 {
+                let s = base * 10f64.powi(k);
+                if s >= shift {
+                    break;
+                }
+                if proves(s) {
+                    shift = s;
+                    break;
+                }
             }
         }
     }

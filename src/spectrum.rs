@@ -5,17 +5,30 @@
 use crate::matrix::PoseGraphMatrix;
 use faer::{Mat, Side, c64};
 
-/// Relative tolerance of the zero test: an eigenvalue μ of W̃(λ*) counts as zero when
-/// μ ≤ ZERO_TOLERANCE · max(1, max_k W̃_kk). The dual is solved to a relative gap of about
-/// 1e-10, which leaves the zero eigenvalues at about 1e-9 of the matrix's scale (the paper's
-/// toy graph: −4e-9 and 7e-9 against 0.027 for the first nonzero one); 1e-6 sits well between.
-pub const ZERO_TOLERANCE: f64 = 1e-6;
+/// The zero test of the SZEP: an eigenvalue μ of W̃(λ*) counts as zero when it is within
+/// ZERO_FACTOR times the accuracy of the dual solution, that is of the larger of its duality gap
+/// |Tr(M X*) − Σλ*| and the rounding allowance of the eigenvalue computation (d·u·‖W̃‖_F), and
+/// never below 1e-12 of the largest diagonal entry of W̃. The eigenvalues a perturbation δ of λ*
+/// moves off zero stay within about δ, while the first nonzero eigenvalue of a graph with the
+/// SZEP stays put: the paper's toy graph has its two zeros at 1e-13 against a gap of 1e-10 and
+/// its next eigenvalue at 0.027.
+pub const ZERO_FACTOR: f64 = 1e3;
 
-/// The absolute zero threshold for a pose graph matrix (see [`ZERO_TOLERANCE`]).
-pub fn zero_threshold(matrix: &PoseGraphMatrix) -> f64 {
+/// The absolute zero threshold for the eigenvalues of W̃(λ*) (see [`ZERO_FACTOR`]), given the
+/// duality gap the SDP solver reached.
+pub fn zero_threshold(matrix: &PoseGraphMatrix, duality_gap: f64) -> f64 {
     let w = matrix.dense();
-    let scale = (0..w.nrows()).map(|k| w[(k, k)].re).fold(1.0f64, f64::max);
-    ZERO_TOLERANCE * scale
+    let d = w.nrows();
+    let mut max_diag = 1.0f64;
+    let mut fro2 = 0.0;
+    for c in 0..d {
+        max_diag = max_diag.max(w[(c, c)].re);
+        for r in 0..d {
+            fro2 += w[(r, c)].norm_sqr();
+        }
+    }
+    let rounding = d as f64 * f64::EPSILON * fro2.sqrt();
+    (ZERO_FACTOR * duality_gap.abs().max(rounding)).max(1e-12 * max_diag)
 }
 
 /// Eigenvalues (ascending) and eigenvectors (columns) of a Hermitian matrix.

@@ -23,8 +23,9 @@ Examples:
 /// matrix W (eq. (24)), of the penalized matrix W(lambda*) at the solution of the dual SDP
 /// (31), and of the rotation-only matrix M = Q - S^H L^-1 S; the number of eigenvalues of
 /// W(lambda*) at zero (the SZEP holds when it is one, Prop. 10); and whether the graph is a tree
-/// or balanced (Prop. 6: W has a zero eigenvalue exactly then). Eigenvalues count as zero below
-/// 1e-6 times the largest diagonal entry of W. Components are analysed one by one; the top-level
+/// or balanced (Prop. 6: W has a zero eigenvalue exactly then). An eigenvalue of W(lambda*) counts
+/// as zero within 1000 times the accuracy of the dual solution (its duality gap, or the rounding
+/// of the eigenvalue computation if larger). Components are analysed one by one; the top-level
 /// lists merge theirs.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-spectrum", version, after_help = EXAMPLES)]
@@ -115,7 +116,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         let dual = solve_dual(&m, args.solver).map_err(|e| Error::Invalid(e.to_string()))?;
         let bound = dual_bound(&matrix, &dual.lambda)
             .ok_or_else(|| Error::Invalid("a component is not connected".into()))?;
-        let zeros = near_zero(&bound.eigenvalues, zero_threshold(&matrix));
+        let zeros = near_zero(
+            &bound.eigenvalues,
+            zero_threshold(&matrix, dual.primal_objective - dual.dual_objective),
+        );
         components.push(ComponentSpectrum {
             first_id: part.ids[0],
             poses: part.num_poses(),
