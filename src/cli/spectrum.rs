@@ -61,7 +61,11 @@ pub struct ComponentSpectrum {
     pub szep: bool,
     pub tree: bool,
     pub balanced: bool,
+    /// d* = Σλ*.
     pub dual_objective: f64,
+    /// λ*, one multiplier per pose of the component, in ascending id order.
+    pub lambda: Vec<f64>,
+    /// The proven lower bound on f* (see pgo-solve).
     pub lower_bound: f64,
 }
 
@@ -132,6 +136,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             tree: part.is_forest(),
             balanced: part.is_balanced(BALANCE_TOLERANCE),
             dual_objective: dual.dual_objective,
+            lambda: dual.lambda.clone(),
             lower_bound: bound.lower_bound,
         });
     }
