@@ -125,9 +125,7 @@ impl PoseGraphMatrix {
         if self.n == 1 {
             return Some(q);
         }
-        let lc = Mat::from_fn(l.nrows(), l.ncols(), |a, b| c64::new(l[(a, b)], 0.0));
-        let llt = lc.llt(Side::Lower).ok()?;
-        let x = llt.solve(&s);
+        let x = laplacian_llt(&l)?.solve(&s);
         let mut m = &q - s.adjoint() * &x;
         // Exactly Hermitian: average out rounding.
         for a in 0..self.n {
@@ -148,10 +146,8 @@ impl PoseGraphMatrix {
         if self.n == 1 {
             return Some(vec![]);
         }
-        let lc = Mat::from_fn(l.nrows(), l.ncols(), |a, b| c64::new(l[(a, b)], 0.0));
-        let llt = lc.llt(Side::Lower).ok()?;
         let rv = Mat::from_fn(self.n, 1, |a, _| r[a]);
-        let rho = llt.solve(-(&s * &rv));
+        let rho = laplacian_llt(&l)?.solve(-(&s * &rv));
         Some((0..self.n - 1).map(|a| rho[(a, 0)]).collect())
     }
 
@@ -207,6 +203,13 @@ impl PoseGraphMatrix {
         }
         s.re
     }
+}
+
+/// The Cholesky factor of the anchored Laplacian L (as a complex matrix, to solve with S̃);
+/// `None` unless L ≻ 0, i.e. unless the graph is connected.
+fn laplacian_llt(l: &Mat<f64>) -> Option<faer::linalg::solvers::Llt<c64>> {
+    let lc = Mat::from_fn(l.nrows(), l.ncols(), |a, b| c64::new(l[(a, b)], 0.0));
+    lc.llt(Side::Lower).ok()
 }
 
 /// The cost f of eq. (8) with per-edge weights, summed edge by edge from the poses (no matrix):
