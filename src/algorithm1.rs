@@ -169,14 +169,19 @@ pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose
         .optimal_positions(&unit)
         .expect("the graph is connected");
     let x: Vec<c64> = rho.into_iter().chain(unit).collect();
-    let poses = matrix.poses(&x);
-    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 = 0 to the anchor's.
+    move_to_anchor(&matrix.poses(&x), anchor)
+}
+
+/// The estimate moved rigidly (f is invariant to that) so that pose 0 is exactly `anchor`.
+pub fn move_to_anchor(poses: &[Pose2], anchor: Pose2) -> Vec<Pose2> {
+    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 to the anchor's.
     let phi = anchor.theta - poses[0].theta;
     let turn = rotation(phi);
+    let p0 = c64::new(poses[0].x, poses[0].y);
     let mut moved: Vec<Pose2> = poses
         .iter()
         .map(|p| {
-            let q = turn * c64::new(p.x, p.y);
+            let q = turn * (c64::new(p.x, p.y) - p0);
             Pose2::new(anchor.x + q.re, anchor.y + q.im, p.theta + phi)
         })
         .collect();

@@ -23,14 +23,18 @@ pub mod algorithm1;
 pub mod certify;
 pub mod cli;
 pub mod error;
+pub mod factor;
 pub mod gauss_newton;
 pub mod graph;
+pub mod init;
 pub mod io;
+pub mod manifold;
 pub mod matrix;
 pub mod nullspace;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
+pub mod staircase;
 pub mod stats;
 pub mod weights;
 

@@ -2,6 +2,7 @@
 //! their entry points. Exit status: 0 success, 1 a negative answer (e.g. not certified), 2 an
 //! error in the input or the request (DESIGN.md §4).
 
+pub mod certify;
 pub mod common;
 pub mod convert;
 pub mod simulate;
@@ -17,6 +18,7 @@ pub fn commands() -> Vec<clap::Command> {
         convert::Args::command(),
         solve::Args::command(),
         spectrum::Args::command(),
+        certify::Args::command(),
         simulate::Args::command(),
     ]
 }

@@ -3,7 +3,9 @@
 use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
 use crate::algorithm1::{ComponentSolution, Rounding, SdpSolver, solve_connected};
 use crate::error::Error;
+use crate::graph::{Pose2, PoseGraph};
 use crate::io::{self, Format, WriteOptions};
+use crate::staircase::{StaircaseOptions, StaircaseSolution, solve_graph};
 use crate::weights::{Weights, edge_weights};
 use clap::Parser;
 use serde::Serialize;
@@ -14,17 +16,19 @@ const EXAMPLES: &str = "\
 Examples:
   pgo-solve datasets/paper_toy.g2o --weights unit -o toy-solved.g2o
   pgo-solve MIT.g2o --json -o MIT-opt.g2o | jq '{cost, lower_bound, certified}'
+  pgo-solve ais2klinik.g2o -o ais2klinik-opt.g2o && pgo-certify ais2klinik.g2o --estimate ais2klinik-opt.g2o
   pgo-simulate -n 20 --seed 3 | pgo-solve - --weights unit --json -o /dev/null";
 
 /// Solve a planar pose graph to global optimality and prove it.
 ///
-/// Runs the paper's Algorithm 1: solves the dual SDP (31), checks the single zero eigenvalue
-/// property (SZEP) of the penalized pose graph matrix W(lambda*), and scales its null vector
-/// (Sec. 5.1); when the SZEP fails it falls back to the null-space method (46) (Sec. 5.2). The
-/// report gives the cost of the estimate, a lower bound on the optimum proven by the dual
-/// solution (floating-point errors of the eigenvalue computation accounted for), and their
-/// difference, which bounds the suboptimality. "certified" means the SZEP holds and that bound
-/// is within --tol. Each connected component is solved on its own.
+/// Small graphs (--method sdp) run the paper's Algorithm 1: the dual SDP (31), the single zero
+/// eigenvalue property (SZEP) of the penalized pose graph matrix W(lambda*), its scaled null
+/// vector (Sec. 5.1) or the null-space method (46) (Sec. 5.2). Larger ones (--method staircase)
+/// run the scalable solver: chordal initialization, Riemannian Newton on |r_i| = 1, a sparse
+/// Cholesky certificate of W(lambda) + eta*blkdiag(0, I), and the Riemannian staircase when it
+/// fails. The report gives the cost of the estimate, a proven lower bound on the optimum and
+/// their difference, which bounds the suboptimality; "certified" means that bound is within
+/// --tol. Each connected component is solved on its own.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-solve", version, after_help = EXAMPLES)]
 pub struct Args {
@@ -42,8 +46,8 @@ pub struct Args {
     #[command(flatten)]
     pub weights: WeightArgs,
 
-    /// Solution method: sdp (the paper's Algorithm 1, for graphs up to 2000 poses)
-    #[arg(long, value_enum, default_value = "sdp")]
+    /// Solution method [auto: sdp for components of at most 100 poses, else staircase]
+    #[arg(long, value_enum, default_value = "auto")]
     pub method: Method,
 
     /// SDP solver for the dual
@@ -66,9 +70,16 @@ pub struct Args {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method
+    /// sdp for components of at most 100 poses, staircase beyond
+    Auto,
+    /// Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)
     Sdp,
+    /// The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase
+    Staircase,
 }
+
+/// Components up to this size go to the SDP under --method auto.
+pub const AUTO_SDP_MAX_POSES: usize = 100;
 
 /// The report of one connected component.
 #[derive(Debug, Serialize)]
@@ -83,10 +94,27 @@ pub struct ComponentReport {
     pub certified: bool,
     pub szep: bool,
     pub near_zero_eigenvalues: usize,
-    pub rounding: Rounding,
-    /// The smallest eigenvalues of W(lambda*), ascending (at most 4).
-    pub penalized_eigenvalues: Vec<f64>,
-    pub sdp_iterations: usize,
+    /// sdp or staircase.
+    pub method: Method,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rounding: Option<Rounding>,
+    /// The smallest eigenvalues of W(lambda*), ascending (at most 4; sdp only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub penalized_eigenvalues: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sdp_iterations: Option<usize>,
+    /// The largest rank the staircase reached (1: no staircase needed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rank: Option<usize>,
+    /// Newton iterations, all ranks together.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    /// The certificate's eta: W(lambda) + eta*blkdiag(0, I) was proven PSD.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eta: Option<f64>,
+    /// Norm of the Riemannian gradient at the estimate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient_norm: Option<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -133,20 +161,38 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let t0 = Instant::now();
     let (mut graph, read_report) = args.input.read()?;
     let read_s = t0.elapsed().as_secs_f64();
-    check_dense_size(&graph, "pgo-solve")?;
+    if args.method == Method::Sdp {
+        check_dense_size(&graph, "pgo-solve")?;
+    }
     let policy = args.weights.weights;
     let t1 = Instant::now();
     let mut components = Vec::new();
-    let mut solutions: Vec<(ComponentSolution, Vec<usize>)> = Vec::new();
+    let mut solutions: Vec<(Vec<Pose2>, Vec<usize>)> = Vec::new();
     for (part, members, _) in graph.components() {
         let weights = edge_weights(&part, policy)?;
-        let solution = solve_connected(&part, &weights, args.solver)?;
-        components.push(component_report(&part, &solution, args.tol));
-        solutions.push((solution, members));
+        let sdp = match args.method {
+            Method::Sdp => true,
+            Method::Staircase => false,
+            Method::Auto => part.num_poses() <= AUTO_SDP_MAX_POSES,
+        };
+        if sdp {
+            let solution = solve_connected(&part, &weights, args.solver)?;
+            components.push(component_report(&part, &solution, args.tol));
+            solutions.push((solution.poses, members));
+        } else {
+            let options = StaircaseOptions {
+                tolerance: args.tol,
+                ..Default::default()
+            };
+            let (solution, poses) = solve_graph(&part, &weights, &options, &mut |_| {})
+                .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
+            components.push(staircase_report(&part, &solution, args.tol));
+            solutions.push((poses, members));
+        }
     }
     let solve_s = t1.elapsed().as_secs_f64();
-    for (solution, members) in &solutions {
-        for (pose, &k) in solution.poses.iter().zip(members) {
+    for (poses, members) in &solutions {
+        for (pose, &k) in poses.iter().zip(members) {
             graph.poses[k] = *pose;
         }
     }
@@ -219,21 +265,54 @@ fn component_report(
         certified: s.szep && suboptimality_bound <= tol * s.cost.abs().max(1.0),
         szep: s.szep,
         near_zero_eigenvalues: s.near_zero,
-        rounding: s.rounding,
-        penalized_eigenvalues: s.eigenvalues.iter().take(4).copied().collect(),
-        sdp_iterations: s.dual.iterations,
+        method: Method::Sdp,
+        rounding: Some(s.rounding),
+        penalized_eigenvalues: Some(s.eigenvalues.iter().take(4).copied().collect()),
+        sdp_iterations: Some(s.dual.iterations),
+        rank: None,
+        iterations: None,
+        eta: None,
+        gradient_norm: None,
+    }
+}
+
+fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tol: f64) -> ComponentReport {
+    let suboptimality_bound = s.cost - s.lower_bound;
+    ComponentReport {
+        first_id: part.ids[0],
+        poses: part.num_poses(),
+        edges: part.edges.len(),
+        cost: s.cost,
+        lower_bound: s.lower_bound,
+        suboptimality_bound,
+        certified: s.bound.is_some() && suboptimality_bound <= tol * s.cost.abs().max(1.0),
+        szep: s.near_zero.is_some_and(|z| z <= 1),
+        near_zero_eigenvalues: s.near_zero.unwrap_or(0),
+        method: Method::Staircase,
+        rounding: None,
+        penalized_eigenvalues: None,
+        sdp_iterations: None,
+        rank: Some(s.rank),
+        iterations: Some(s.iterations),
+        eta: s.bound.map(|b| b.eta),
+        gradient_norm: Some(s.gradient_norm),
     }
 }
 
 fn text_report(input: &str, r: &Report) -> String {
     let mut out = format!(
-        "pgo-solve: {}: {} poses, {} edges, {} component{}; weights {}; method sdp (solver {})\n",
+        "pgo-solve: {}: {} poses, {} edges, {} component{}; weights {}; method {} (sdp solver {})\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
         r.edges,
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),
+        match r.method {
+            Method::Auto => "auto",
+            Method::Sdp => "sdp",
+            Method::Staircase => "staircase",
+        },
         match r.solver {
             SdpSolver::Ipm => "ipm",
             SdpSolver::Clarabel => "clarabel",
@@ -284,6 +363,8 @@ fn text_report(input: &str, r: &Report) -> String {
         "result",
         if r.certified {
             "certified optimal within the bound above".to_string()
+        } else if r.components.iter().any(|c| c.method == Method::Staircase) {
+            "NOT certified within --tol; the bound above still holds".to_string()
         } else if r.szep {
             "NOT certified: the SZEP holds but the bound exceeds --tol".to_string()
         } else {

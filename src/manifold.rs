@@ -1,0 +1,403 @@
+//! The rank-p (Burer-Monteiro) form of the problem in the complex domain, for the scalable
+//! solver: X = [P; Y] ∈ ℂ^{(2n−1)×p}, rows 0..n−1 the positions of poses 1..n−1 (pose 0 is the
+//! anchor, P_0 = 0, eq. (15)), rows n−1..2n−1 the rotations, each a unit vector of ℂ^p. The cost
+//! is f(X) = tr(X* W̃ X) (eq. (24) with p columns; p = 1 is the problem itself, and a larger p is
+//! the SDP relaxation (37) restricted to rank p), evaluated edge by edge:
+//!
+//! ```text
+//! f(X) = Σ_e τ ‖P_j − P_i − Δ Y_i‖² + κ ‖Y_j − R Y_i‖²
+//! ```
+//!
+//! so that no cancellation between large terms of W̃ spoils it. The Euclidean gradient is 2W̃X,
+//! also summed edge by edge from the residuals. On the product of spheres, the first-order
+//! conditions give the multipliers λ_a = Re⟨Y_a, (W̃X)_a⟩, and the Riemannian Hessian in an
+//! orthonormal tangent basis B is H = 2 Bᵀ (W̃ − blkdiag(0, diag λ)) B = 2 Bᵀ W̃(λ) B (the
+//! penalized matrix of Sec. 4.1, real form of eq. (16)): a second-order critical point has
+//! W̃(λ) ⪰ 0 on the tangent space, and W̃(λ) ⪰ 0 everywhere proves global optimality (Theorem 1).
+
+use crate::factor::Assembly;
+use crate::graph::PoseGraph;
+use crate::matrix::{PoseGraphMatrix, rotation, translation};
+use crate::weights::EdgeWeight;
+use faer::c64;
+
+/// One edge's term of f: τ|p_j − p_i − Δ r_i|² + κ|r_j − R r_i|².
+#[derive(Debug, Clone, Copy)]
+pub struct EdgeTerm {
+    pub i: usize,
+    pub j: usize,
+    pub delta: c64,
+    pub rot: c64,
+    pub tau: f64,
+    pub kappa: f64,
+}
+
+/// The problem at rank p: the edges, the matrix W̃ (for its pattern) and the layout.
+pub struct Problem {
+    pub n: usize,
+    pub terms: Vec<EdgeTerm>,
+    pub matrix: PoseGraphMatrix,
+    /// Upper-triangle entries (row ≤ col) of W̃, diagonal included: (row, col, value).
+    pub upper: Vec<(usize, usize, c64)>,
+    /// A fill-reducing rank of each pose ([`crate::factor::pose_rank`]).
+    pub pose_rank: Vec<usize>,
+}
+
+/// A point of the rank-p manifold: (2n−1) rows of p entries, row-major.
+#[derive(Debug, Clone)]
+pub struct Point {
+    pub p: usize,
+    pub x: Vec<c64>,
+}
+
+impl Point {
+    /// Row k.
+    pub fn row(&self, k: usize) -> &[c64] {
+        &self.x[k * self.p..(k + 1) * self.p]
+    }
+
+    fn row_mut(&mut self, k: usize) -> &mut [c64] {
+        &mut self.x[k * self.p..(k + 1) * self.p]
+    }
+}
+
+fn dot(a: &[c64], b: &[c64]) -> c64 {
+    a.iter().zip(b).map(|(x, y)| x.conj() * y).sum()
+}
+
+impl Problem {
+    /// The problem of a connected graph with per-edge weights.
+    pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
+        let terms = graph
+            .edges
+            .iter()
+            .zip(weights)
+            .map(|(e, w)| EdgeTerm {
+                i: e.i,
+                j: e.j,
+                delta: translation(e.measurement),
+                rot: rotation(e.measurement.theta),
+                tau: w.tau,
+                kappa: w.kappa,
+            })
+            .collect();
+        let matrix = PoseGraphMatrix::new(graph, weights);
+        let mut upper = Vec::with_capacity(matrix.w.compute_nnz() / 2 + matrix.dim());
+        for col in 0..matrix.dim() {
+            let rows = matrix.w.symbolic().row_idx_of_col_raw(col);
+            for (&row, v) in rows.iter().zip(matrix.w.val_of_col(col)) {
+                if row <= col {
+                    upper.push((row, col, *v));
+                }
+            }
+        }
+        let n = graph.num_poses();
+        let pose_rank = crate::factor::pose_rank(n, graph.edges.iter().map(|e| (e.i, e.j)));
+        Problem {
+            n,
+            terms,
+            matrix,
+            upper,
+            pose_rank,
+        }
+    }
+
+    /// The pose of each row of X (positions of poses 1..n−1, then rotations of 0..n−1).
+    pub fn row_poses(&self) -> Vec<usize> {
+        (1..self.n).chain(0..self.n).collect()
+    }
+
+    /// A fill-reducing order of the rows of X ([`crate::factor::group_ordering`]).
+    pub fn row_order(&self) -> Vec<usize> {
+        crate::factor::group_ordering(&self.pose_rank, &self.row_poses())
+    }
+
+    /// The dimension 2n − 1 (rows of X).
+    pub fn rows(&self) -> usize {
+        2 * self.n - 1
+    }
+
+    /// Row of pose k's position (None for the anchor, pose 0).
+    pub fn position_row(&self, k: usize) -> Option<usize> {
+        (k > 0).then(|| k - 1)
+    }
+
+    /// Row of pose k's rotation.
+    pub fn rotation_row(&self, k: usize) -> usize {
+        self.n - 1 + k
+    }
+
+    /// f(X), edge by edge.
+    pub fn cost(&self, x: &Point) -> f64 {
+        let p = x.p;
+        let zero = vec![c64::new(0.0, 0.0); p];
+        let mut f = 0.0;
+        for t in &self.terms {
+            let pi = self.position_row(t.i).map_or(&zero[..], |r| x.row(r));
+            let pj = self.position_row(t.j).map_or(&zero[..], |r| x.row(r));
+            let yi = x.row(self.rotation_row(t.i));
+            let yj = x.row(self.rotation_row(t.j));
+            for c in 0..p {
+                f += t.tau * (pj[c] - pi[c] - t.delta * yi[c]).norm_sqr()
+                    + t.kappa * (yj[c] - t.rot * yi[c]).norm_sqr();
+            }
+        }
+        f
+    }
+
+    /// G = W̃X (half the Euclidean gradient), summed edge by edge from the residuals.
+    pub fn half_gradient(&self, x: &Point) -> Vec<c64> {
+        let p = x.p;
+        let mut g = vec![c64::new(0.0, 0.0); x.x.len()];
+        let zero = vec![c64::new(0.0, 0.0); p];
+        for t in &self.terms {
+            let ri = self.position_row(t.i);
+            let rj = self.position_row(t.j);
+            let (yi_row, yj_row) = (self.rotation_row(t.i), self.rotation_row(t.j));
+            for c in 0..p {
+                let pi = ri.map_or(zero[c], |r| x.x[r * p + c]);
+                let pj = rj.map_or(zero[c], |r| x.x[r * p + c]);
+                let yi = x.x[yi_row * p + c];
+                let yj = x.x[yj_row * p + c];
+                let et = (pj - pi - t.delta * yi) * t.tau;
+                let er = (yj - t.rot * yi) * t.kappa;
+                if let Some(r) = rj {
+                    g[r * p + c] += et;
+                }
+                if let Some(r) = ri {
+                    g[r * p + c] -= et;
+                }
+                g[yi_row * p + c] -= t.delta.conj() * et + t.rot.conj() * er;
+                g[yj_row * p + c] += er;
+            }
+        }
+        g
+    }
+
+    /// The multipliers λ_a = Re⟨Y_a, (W̃X)_a⟩ of the first-order conditions (Sec. 4.1, eq. (33)).
+    pub fn multipliers(&self, x: &Point, g: &[c64]) -> Vec<f64> {
+        let p = x.p;
+        (0..self.n)
+            .map(|a| {
+                let r = self.rotation_row(a);
+                dot(x.row(r), &g[r * p..(r + 1) * p]).re
+            })
+            .collect()
+    }
+}
+
+/// An orthonormal real basis of the tangent space at each row (as complex p-vectors):
+/// positions: e_c and i·e_c (2p vectors); rotations y: 2p − 1 vectors orthogonal to y in
+/// ℝ^{2p} (the last 2p − 1 columns of the Householder reflector that maps y to ±e_1).
+pub struct TangentBasis {
+    pub p: usize,
+    /// Per row: offset of its first coordinate, and its vectors (d_k of them, p entries each).
+    pub offsets: Vec<usize>,
+    pub vectors: Vec<Vec<c64>>,
+    pub dim: usize,
+}
+
+impl TangentBasis {
+    pub fn new(problem: &Problem, x: &Point) -> Self {
+        let p = x.p;
+        let rows = problem.rows();
+        let mut offsets = Vec::with_capacity(rows + 1);
+        let mut vectors = Vec::with_capacity(rows);
+        let mut off = 0;
+        for k in 0..rows {
+            offsets.push(off);
+            let basis = if k < problem.n - 1 {
+                position_basis(p)
+            } else {
+                sphere_basis(x.row(k))
+            };
+            off += basis.len() / p;
+            vectors.push(basis);
+        }
+        offsets.push(off);
+        TangentBasis {
+            p,
+            offsets,
+            vectors,
+            dim: off,
+        }
+    }
+
+    /// The number of coordinates of row k.
+    pub fn len(&self, k: usize) -> usize {
+        self.offsets[k + 1] - self.offsets[k]
+    }
+
+    /// The s-th basis vector of row k.
+    pub fn vector(&self, k: usize, s: usize) -> &[c64] {
+        &self.vectors[k][s * self.p..(s + 1) * self.p]
+    }
+
+    /// Coordinates of a (2n−1)×p matrix's rows in the basis: Re⟨b, v⟩.
+    pub fn coordinates(&self, v: &[c64]) -> Vec<f64> {
+        let p = self.p;
+        let mut out = vec![0.0; self.dim];
+        for k in 0..self.offsets.len() - 1 {
+            let row = &v[k * p..(k + 1) * p];
+            for s in 0..self.len(k) {
+                out[self.offsets[k] + s] = dot(self.vector(k, s), row).re;
+            }
+        }
+        out
+    }
+
+    /// The pattern of the Hessian in these coordinates (upper triangle), one entry per value
+    /// [`TangentBasis::hessian_values`] produces, in the same order.
+    pub fn hessian_pattern(&self, problem: &Problem) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for &(k, l, _) in &problem.upper {
+            for s in 0..self.len(k) {
+                for t in 0..self.len(l) {
+                    let (a, b) = (self.offsets[k] + s, self.offsets[l] + t);
+                    if a <= b {
+                        out.push((a, b));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Values of H + μ·D, H = 2 Bᵀ W̃(λ) B, D = diag(2 W̃_kk) per coordinate (a scale-invariant
+    /// Levenberg-Marquardt damping), in the order of [`TangentBasis::hessian_pattern`].
+    pub fn hessian_values(&self, problem: &Problem, lambda: &[f64], mu: f64, out: &mut Vec<f64>) {
+        out.clear();
+        let n = problem.n;
+        for &(k, l, w) in &problem.upper {
+            for s in 0..self.len(k) {
+                let bs = self.vector(k, s);
+                for t in 0..self.len(l) {
+                    let (a, b) = (self.offsets[k] + s, self.offsets[l] + t);
+                    if a > b {
+                        continue;
+                    }
+                    let bt = self.vector(l, t);
+                    let mut v = 2.0
+                        * bs.iter()
+                            .zip(bt)
+                            .map(|(x, y)| (x.conj() * w * y).re)
+                            .sum::<f64>();
+                    if a == b {
+                        if k >= n - 1 {
+                            v -= 2.0 * lambda[k - (n - 1)];
+                        }
+                        v += mu * 2.0 * w.re;
+                    }
+                    out.push(v);
+                }
+            }
+        }
+    }
+
+    /// The damping weights D (diag(2 W̃_kk) per coordinate).
+    pub fn damping(&self, problem: &Problem) -> Vec<f64> {
+        let mut d = vec![0.0; self.dim];
+        for &(k, l, w) in &problem.upper {
+            if k == l {
+                for s in 0..self.len(k) {
+                    d[self.offsets[k] + s] = 2.0 * w.re;
+                }
+            }
+        }
+        d
+    }
+
+    /// The point moved along tangent coordinates δ: positions X_k + Bδ, rotations
+    /// (Y_a + Bδ)/‖Y_a + Bδ‖ (the projection retraction, second order, so Newton keeps its
+    /// quadratic convergence).
+    pub fn retract(&self, x: &Point, delta: &[f64], n: usize) -> Point {
+        let p = self.p;
+        let mut y = x.clone();
+        for k in 0..self.offsets.len() - 1 {
+            let row = y.row_mut(k);
+            for s in 0..self.offsets[k + 1] - self.offsets[k] {
+                let d = delta[self.offsets[k] + s];
+                for (z, b) in row.iter_mut().zip(&self.vectors[k][s * p..(s + 1) * p]) {
+                    *z += b * d;
+                }
+            }
+            if k >= n - 1 {
+                let norm = row.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
+                for z in row.iter_mut() {
+                    *z /= norm;
+                }
+            }
+        }
+        y
+    }
+}
+
+fn position_basis(p: usize) -> Vec<c64> {
+    let mut out = vec![c64::new(0.0, 0.0); 2 * p * p];
+    for c in 0..p {
+        out[(2 * c) * p + c] = c64::new(1.0, 0.0);
+        out[(2 * c + 1) * p + c] = c64::new(0.0, 1.0);
+    }
+    out
+}
+
+/// 2p − 1 orthonormal vectors of ℝ^{2p} ≅ ℂ^p orthogonal to the unit vector y.
+fn sphere_basis(y: &[c64]) -> Vec<c64> {
+    let p = y.len();
+    if p == 1 {
+        // i·y: the rotation's tangent e^{iθ} → i e^{iθ}.
+        return vec![c64::new(-y[0].im, y[0].re)];
+    }
+    // Real vector v = (Re y_0, Im y_0, ...); Householder H = I − 2uuᵀ/‖u‖², u = v + sign(v_0) e_0,
+    // maps v to −sign(v_0) e_0; columns 1..2p of H span v⊥.
+    let m = 2 * p;
+    let v: Vec<f64> = y.iter().flat_map(|z| [z.re, z.im]).collect();
+    let sign = if v[0] >= 0.0 { 1.0 } else { -1.0 };
+    let mut u = v.clone();
+    u[0] += sign;
+    let uu: f64 = u.iter().map(|a| a * a).sum();
+    let mut out = Vec::with_capacity((m - 1) * p);
+    for col in 1..m {
+        let h: Vec<f64> = (0..m)
+            .map(|row| (if row == col { 1.0 } else { 0.0 }) - 2.0 * u[row] * u[col] / uu)
+            .collect();
+        for c in 0..p {
+            out.push(c64::new(h[2 * c], h[2 * c + 1]));
+        }
+    }
+    out
+}
+
+/// The Newton system's sparse matrix for a fixed rank and pattern.
+pub struct NewtonSystem {
+    pub assembly: Assembly<f64>,
+    values: Vec<f64>,
+    /// The factorization, analyzed once for the pattern (shared by every iterate of a rank).
+    pub factor: crate::factor::SparseFactor<f64>,
+}
+
+impl NewtonSystem {
+    pub fn new(problem: &Problem, basis: &TangentBasis) -> Self {
+        let pattern = basis.hessian_pattern(problem);
+        let assembly = Assembly::new(basis.dim, &pattern);
+        // Coordinates grouped by pose, poses in the problem's fill-reducing order.
+        let poses = problem.row_poses();
+        let group: Vec<usize> = (0..poses.len())
+            .flat_map(|k| std::iter::repeat_n(poses[k], basis.len(k)))
+            .collect();
+        let order = crate::factor::group_ordering(&problem.pose_rank, &group);
+        let factor =
+            crate::factor::SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order);
+        NewtonSystem {
+            assembly,
+            values: Vec::with_capacity(pattern.len()),
+            factor,
+        }
+    }
+
+    /// Rewrites the matrix to H + μD at the point whose basis and multipliers are given.
+    pub fn update(&mut self, problem: &Problem, basis: &TangentBasis, lambda: &[f64], mu: f64) {
+        basis.hessian_values(problem, lambda, mu, &mut self.values);
+        self.assembly.fill(&self.values);
+    }
+}
