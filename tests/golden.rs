@@ -15,6 +15,7 @@ fn tool(name: &str) -> &'static str {
         "pgo-simulate" => env!("CARGO_BIN_EXE_pgo-simulate"),
         "pgo-solve" => env!("CARGO_BIN_EXE_pgo-solve"),
         "pgo-spectrum" => env!("CARGO_BIN_EXE_pgo-spectrum"),
+        "pgo-certify" => env!("CARGO_BIN_EXE_pgo-certify"),
         other => panic!("unknown tool {other} in tests/golden/cases.txt"),
     }
 }

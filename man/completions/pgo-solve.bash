@@ -54,7 +54,7 @@ _pgo__solve() {
                     return 0
                     ;;
                 --method)
-                    COMPREPLY=($(compgen -W "sdp" -- "${cur}"))
+                    COMPREPLY=($(compgen -W "auto sdp staircase" -- "${cur}"))
                     return 0
                     ;;
                 --solver)
