@@ -410,3 +410,36 @@ fn output_file_is_complete_and_readable() {
         assert_eq!(mode & 0o777, 0o644);
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn writing_to_a_device_writes_through_it() {
+    // `-o /dev/null` must not rename a temporary file over the device (that would replace
+    // /dev/null with a regular file for the whole machine); devices and FIFOs are written in place.
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("g.g2o");
+    std::fs::write(
+        &input,
+        "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n",
+    )
+    .unwrap();
+    let out = run(&[s(&input), "-o", "/dev/null"], None);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let meta = std::fs::metadata("/dev/null").unwrap();
+    assert!(
+        meta.file_type().is_char_device(),
+        "/dev/null is no longer a device"
+    );
+    for solve_args in [["--method", "staircase"], ["--method", "sdp"]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_pgo-solve"))
+            .arg(&input)
+            .args(solve_args)
+            .args(["--json", "-o", "/dev/null"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let meta = std::fs::metadata("/dev/null").unwrap();
+        assert!(meta.file_type().is_char_device());
+    }
+}

@@ -129,6 +129,18 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
         return write_named(graph, options, stdout.lock(), "<stdout>");
     }
     let target = std::path::Path::new(path);
+    // A device or a FIFO (/dev/null, /dev/stdout, a named pipe) is written in place: renaming a
+    // temporary file over it would replace the device with a regular file.
+    if let Ok(meta) = std::fs::metadata(target)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(target)
+            .map_err(|e| Error::io(path, e))?;
+        return write_named(graph, options, std::io::BufWriter::new(file), path);
+    }
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => std::path::Path::new("."),
