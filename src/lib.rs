@@ -28,6 +28,7 @@ pub mod graph;
 pub mod io;
 pub mod matrix;
 pub mod nullspace;
+pub mod refine;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
