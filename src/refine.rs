@@ -24,8 +24,10 @@
 //! triangle of H = Σ Jᵀ Ω J (3m x 3m over the m free poses, block sparse, written in place into a
 //! pattern built once), and solves (H + λ I) δ = −g by sparse Cholesky. The symbolic analysis
 //! (AMD ordering, elimination tree, supernodes) is done once per call and reused by every
-//! numeric factorization, into a factor buffer and a workspace also allocated once; all runs
-//! sequentially, so results do not depend on the thread count.
+//! numeric factorization, into a factor buffer and a workspace also allocated once (faer's
+//! `SymbolicCholesky`, the analysis `SymbolicLlt` wraps, used directly so that `Llt` does not
+//! allocate per factorization); all runs sequentially, so results do not depend on the thread
+//! count.
 //!
 //! Damping, as g2o's `OptimizationAlgorithmLevenberg`: λ₀ = 10⁻⁵ · max_k H_kk; a trial step is
 //! accepted iff chi2 decreases, and then, with ρ = (chi2 − chi2_trial) / δᵀ(λ δ − g) (actual over
