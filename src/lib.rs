@@ -31,6 +31,7 @@ pub mod io;
 pub mod manifold;
 pub mod matrix;
 pub mod nullspace;
+pub mod refine;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;

@@ -230,13 +230,13 @@ pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::graph::{Edge, NoiseKind, SymMat3};
     use crate::weights::{Weights, edge_weights};
 
     /// A small deterministic generator, so that the tests need no dependency.
-    pub(crate) struct Rng(u64);
+    pub(crate) struct Rng(pub(crate) u64);
 
     impl Rng {
         pub(crate) fn next(&mut self) -> f64 {
