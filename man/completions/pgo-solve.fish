@@ -17,6 +17,7 @@ clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `
 complete -c pgo-solve -l tol -d 'Relative suboptimality bound under which the result is called certified' -r
 complete -c pgo-solve -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
 complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
+complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2) before writing it; the report\'s cost and bound stay those of the certified estimate, and chi2 before and after is added'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
 complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'
 complete -c pgo-solve -s h -l help -d 'Print help (see more with \'--help\')'

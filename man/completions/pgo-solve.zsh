@@ -35,6 +35,7 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--tol=[Relative suboptimality bound under which the result is called certified]:REL:_default' \
 '--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
+'--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, and chi2 before and after is added]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \
 '-h[Print help (see more with '\''--help'\'')]' \
