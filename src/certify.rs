@@ -132,7 +132,7 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
 /// equilibration (exact; B's diagonal lies in [1, 4)). A floating-point LLᴴ that succeeds is the
 /// exact factor of B + ΔB with ‖ΔB‖₂ of the order of dim·u·‖B‖₂ (Higham, Accuracy and Stability of
 /// Numerical Algorithms, §10.1: the backward error of Cholesky; u the unit roundoff). pgo takes
-/// α = 2·dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B) plus the rounding of B's own diagonal, so
+/// α = dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B, summed exactly) plus the rounding of B's own diagonal, so
 /// success proves D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 under that backward-error model, i.e.
 /// W̃(λ) + ηP ⪰ 0. (The worst-case componentwise bound, γ_k times the fill, would be ~100x
 /// larger and the bound it gives too loose to certify at 1e-6; an a-posteriori residual in
@@ -266,57 +266,70 @@ impl SparseCertifier {
         self.alpha0(lambda) * max_a
     }
 
-    /// α₀ = 2·dim·u·‖B‖_∞ for the equilibrated B (its diagonal in [1, 4), off-diagonal entries
-    /// |W̃_kl|/√(a_kk a_ll) up to a factor 2 each way).
-    fn alpha0(&self, lambda: &[f64]) -> f64 {
+    /// The diagonal a_k of W̃(λ) + ηP (absolute values when `absolute`, for estimates) and the
+    /// power-of-two scaling D_k = 2^{−⌊log₂(a_k)/2⌋} that puts D_k² a_k in [1, 4). `None` if a
+    /// diagonal entry is not positive (then W̃(λ) + ηP is not PSD).
+    fn scaling(&self, lambda: &[f64], eta: f64, absolute: bool) -> Option<(Vec<f64>, Vec<f64>)> {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
-        let a: Vec<f64> = (0..dim)
-            .map(|k| {
-                let w = self.entries[self.diagonal[k]].2.re;
-                let v = if k >= rot0 { w - lambda[k - rot0] } else { w };
-                v.abs().max(f64::MIN_POSITIVE)
-            })
-            .collect();
-        let mut rows = vec![4.0f64; dim];
-        for &(r, c, v) in &self.entries {
-            if r != c {
-                let e = 2.0 * v.norm() / (a[r] * a[c]).sqrt();
-                rows[r] += e;
-                rows[c] += e;
-            }
-        }
-        let norm = rows.iter().fold(0.0f64, |m, &v| m.max(v));
-        2.0 * dim as f64 * f64::EPSILON / 2.0 * norm
-    }
-
-    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Returns α on success.
-    fn try_eta(&mut self, lambda: &[f64], eta: f64, alpha0: f64) -> Option<f64> {
-        let dim = self.diagonal.len();
-        let rot0 = dim - lambda.len();
-        // Diagonal of W̃(λ) + ηP and its power-of-two scaling.
         let mut a = vec![0.0; dim];
         let mut scale = vec![0.0; dim];
-        let mut alpha = alpha0;
         for k in 0..dim {
             let w = self.entries[self.diagonal[k]].2.re;
-            a[k] = if k >= rot0 {
+            let v = if k >= rot0 {
                 w - lambda[k - rot0] + eta
             } else {
                 w
+            };
+            a[k] = if absolute {
+                v.abs().max(f64::MIN_POSITIVE)
+            } else {
+                v
             };
             if !(a[k] > 0.0 && a[k].is_finite()) {
                 return None;
             }
             let e = (a[k].log2() / 2.0).floor();
             scale[k] = 2f64.powi(-(e as i32));
-            // Rounding of a_kk itself (two additions), in equilibrated units.
-            let magnitude = if k >= rot0 {
-                w + lambda[k - rot0].abs() + eta
-            } else {
-                w
-            };
-            alpha = alpha.max(alpha0 + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
+        }
+        Some((a, scale))
+    }
+
+    /// α = dim·u·‖B‖_∞ for the equilibrated B = D(W̃(λ) + ηP)D (exactly summed row by row;
+    /// ‖B‖₂ ≤ ‖B‖_∞ for Hermitian B): the backward-error model of the factorization.
+    fn alpha(&self, a: &[f64], scale: &[f64]) -> f64 {
+        let dim = self.diagonal.len();
+        let mut rows: Vec<f64> = (0..dim).map(|k| a[k] * scale[k] * scale[k]).collect();
+        for &(r, c, v) in &self.entries {
+            if r != c {
+                let e = v.norm() * scale[r] * scale[c];
+                rows[r] += e;
+                rows[c] += e;
+            }
+        }
+        let norm = rows.iter().fold(0.0f64, |m, &v| m.max(v));
+        dim as f64 * (f64::EPSILON / 2.0) * norm
+    }
+
+    fn alpha0(&self, lambda: &[f64]) -> f64 {
+        match self.scaling(lambda, 0.0, true) {
+            Some((a, scale)) => self.alpha(&a, &scale),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Returns α on success.
+    fn try_eta(&mut self, lambda: &[f64], eta: f64, _alpha0: f64) -> Option<f64> {
+        let dim = self.diagonal.len();
+        let rot0 = dim - lambda.len();
+        let (a, scale) = self.scaling(lambda, eta, false)?;
+        let base = self.alpha(&a, &scale);
+        let mut alpha = base;
+        // Plus the rounding of each a_kk itself (two additions), in equilibrated units.
+        for k in rot0..dim {
+            let w = self.entries[self.diagonal[k]].2.re;
+            let magnitude = w + lambda[k - rot0].abs() + eta;
+            alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
         self.values.clear();
         for &(r, c, v) in &self.entries {
