@@ -185,19 +185,18 @@ fn swapper(anchor: usize) -> impl Fn(usize) -> usize {
 }
 
 /// The staircase on a connected graph, from the chordal initialization, anchored at the centre
-/// of that initialization; poses in the graph's indexing and gauge (pose 0 where the input has it).
+/// of the input's estimate; poses in the graph's indexing and gauge (pose 0 where the input has it).
 pub fn solve_graph(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Vec<Pose2>)> {
-    let first = Anchored::at(graph, weights, 0);
-    let r = chordal_rotations(&first.problem)?;
-    let start = with_optimal_positions(&first.problem, &r)?;
-    let initial = first.poses(&start, graph.poses[0]);
-    let anchored = Anchored::centered(graph, weights, &initial);
-    let start = anchored.point(&initial);
+    // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
+    // or its spanning-tree composition for edges-only files), so the problem is built once.
+    let anchored = Anchored::centered(graph, weights, &graph.poses);
+    let r = chordal_rotations(&anchored.problem)?;
+    let start = with_optimal_positions(&anchored.problem, &r)?;
     let solution = solve_from(&anchored.problem, start, options, observer);
     let poses = anchored.poses(&solution.point, graph.poses[0]);
     Some((solution, poses))
