@@ -253,12 +253,25 @@ pub fn certify_estimate(
     }
 }
 
-/// Riemannian Newton (damped) at the point's rank.
+/// Riemannian Newton (damped) at the point's rank, to the stopping rule of the module docs (a
+/// looser one, 1e-5·f, above rank 1).
 pub fn optimize(
     problem: &Problem,
     start: Point,
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
+) -> Local {
+    let stop = if start.p == 1 { 1e-12 } else { 1e-5 };
+    optimize_to(problem, start, options, observer, stop)
+}
+
+/// Riemannian Newton (damped) until a step predicts a decrease of at most `stop`·f.
+pub fn optimize_to(
+    problem: &Problem,
+    start: Point,
+    options: &StaircaseOptions,
+    observer: &mut dyn FnMut(&Iteration),
+    stop_tolerance: f64,
 ) -> Local {
     let p = start.p;
     let weight_scale: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
@@ -279,10 +292,6 @@ pub fn optimize(
     let mut gauss_newton = std::env::var_os("PGO_NO_GN").is_none();
     let mut iterations = 0;
     let mut converged = false;
-    // Above rank 1 the minimum is degenerate when the relaxation is exact (rank-deficient Y):
-    // Newton converges only linearly there, so the rank-p stage stops at a looser tolerance and
-    // the rank-1 rounding is polished instead.
-    let stop_tolerance = if p == 1 { 1e-12 } else { 1e-7 };
     let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
     while iterations < options.max_iterations {
         if norm(&grad) == 0.0 {
@@ -392,10 +401,20 @@ pub fn solve_from(
     let resolution = certifier.resolution(&local.lambda, &local.point.x, 1);
     let reach = eta_max(local.cost).max(64.0 * resolution);
     if let Some(bound) = certifier.certify(&local.lambda, &local.point.x, 1, reach) {
-        return finish(local, Some(bound), 1, iterations, &mut certifier, options);
+        return finish(
+            local,
+            Some(bound),
+            None,
+            1,
+            iterations,
+            &mut certifier,
+            options,
+        );
     }
-    let mut rank1 = local.clone();
-    let mut relaxation_bound: Option<SparseBound> = None;
+    // The staircase: lift along negative curvature, optimize at rank p (to a loose tolerance:
+    // the minimum there is degenerate when the relaxation is exact, so Newton is slow to finish),
+    // round to rank 1, polish, and try to certify; repeat one rank higher while that fails.
+    let mut best = local.clone();
     let mut rank = 1;
     let mut escape_factor: Option<SparseFactor<c64>> = None;
     while rank < options.max_rank {
@@ -405,51 +424,78 @@ pub fn solve_from(
         rank += 1;
         local = optimize(problem, next, options, observer);
         iterations += local.iterations;
-        if let Some(bound) =
-            certifier.certify(&local.lambda, &local.point.x, rank, eta_max(local.cost))
-        {
-            relaxation_bound = Some(bound);
-            break;
-        }
-    }
-    // Round the highest-rank point to rank 1 and polish it.
-    if rank > 1 {
-        let rounded = round_to_rank_one(problem, &local.point);
-        let polished = optimize(problem, rounded, options, observer);
-        iterations += polished.iterations;
-        if polished.cost < rank1.cost {
-            rank1 = polished;
-        }
-    }
-    if let Some(bound) = certifier.certify(&rank1.lambda, &rank1.point.x, 1, eta_max(rank1.cost)) {
-        return finish(
-            rank1,
-            Some(bound),
-            rank,
-            iterations,
-            &mut certifier,
+        let polished = optimize(
+            problem,
+            round_to_rank_one(problem, &local.point),
             options,
+            observer,
         );
+        iterations += polished.iterations;
+        if polished.cost < best.cost {
+            best = polished;
+        }
+        let resolution = certifier.resolution(&best.lambda, &best.point.x, 1);
+        let reach = eta_max(best.cost).max(64.0 * resolution);
+        if let Some(bound) = certifier.certify(&best.lambda, &best.point.x, 1, reach) {
+            return finish(
+                best,
+                Some(bound),
+                None,
+                rank,
+                iterations,
+                &mut certifier,
+                options,
+            );
+        }
     }
-    // No certificate within the tolerance: the best bound proven (the relaxation's, else the
-    // estimate's own λ with whatever η makes W̃(λ) + ηP ⪰ 0).
-    let bound = relaxation_bound.or_else(|| {
-        let eta_all = rank1.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
-        certifier.certify(&rank1.lambda, &rank1.point.x, 1, eta_all)
-    });
-    finish(rank1, bound, rank, iterations, &mut certifier, options)
+    // No certificate: the relaxation's bound at the last rank (converged tightly for it), or the
+    // estimate's own λ with whatever η makes W̃(λ) + ηP ⪰ 0 — whichever is higher.
+    let mut bound = None;
+    let mut relaxed_lambda = None;
+    if rank > 1 {
+        let tight = StaircaseOptions {
+            tolerance: 0.0,
+            ..*options
+        };
+        let relaxed = optimize_to(problem, local.point.clone(), &tight, observer, 1e-12);
+        iterations += relaxed.iterations;
+        let eta_all = relaxed.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
+        bound = certifier.certify(&relaxed.lambda, &relaxed.point.x, rank, eta_all);
+        relaxed_lambda = Some(relaxed.lambda);
+    }
+    let eta_all = best.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
+    let own = certifier.certify(&best.lambda, &best.point.x, 1, eta_all);
+    let (bound, bound_lambda) = match (bound, own) {
+        (Some(a), Some(b)) if a.lower_bound < b.lower_bound => (Some(b), None),
+        (Some(a), _) => (Some(a), relaxed_lambda),
+        (None, b) => (b, None),
+    };
+    let own_lambda = best.lambda.clone();
+    finish(
+        best,
+        bound,
+        Some(bound_lambda.as_deref().unwrap_or(&own_lambda)),
+        rank,
+        iterations,
+        &mut certifier,
+        options,
+    )
 }
 
+/// The solution, with the near-zero eigenvalue count of W̃(λ) for the λ that proved the bound
+/// (`bound_lambda`; the estimate's own when it did).
 fn finish(
     local: Local,
     bound: Option<SparseBound>,
+    bound_lambda: Option<&[f64]>,
     rank: usize,
     iterations: usize,
     certifier: &mut SparseCertifier,
     options: &StaircaseOptions,
 ) -> StaircaseSolution {
-    let threshold = 16.0 * certifier.eigenvalue_resolution(&local.lambda);
-    let near_zero = certifier.count_below(&local.lambda, threshold);
+    let lambda = bound_lambda.unwrap_or(&local.lambda);
+    let threshold = 16.0 * certifier.eigenvalue_resolution(lambda);
+    let near_zero = certifier.count_below(lambda, threshold);
     let lower_bound = bound.map_or(0.0, |b| b.lower_bound.max(0.0));
     let certified =
         bound.is_some() && local.cost - lower_bound <= options.tolerance * local.cost.max(1.0);
