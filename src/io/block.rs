@@ -262,7 +262,7 @@ impl BlockParser<'_> {
             Tag::Comment => Ok(()),
             Tag::Vertex(family) => self.vertex(line_no, line, fields, family),
             Tag::Edge(family) => self.edge(line_no, line, fields, family),
-            Tag::Fix => self.fix(line_no, line, fields),
+            Tag::Fix => self.fix(line_no, fields),
             Tag::Equiv => {
                 if self.options.strict {
                     return Err(at_tag(ParseErrorKind::Equiv));
@@ -449,22 +449,15 @@ impl BlockParser<'_> {
         Ok(())
     }
 
-    fn fix(&mut self, line_no: usize, line: &[u8], fields: &[Field]) -> Result<(), ParseError> {
+    fn fix(&mut self, line_no: usize, fields: &[Field]) -> Result<(), ParseError> {
         let args: Vec<&Field> = fields[1..]
             .iter()
             .take_while(|f| f.text.first() != Some(&b'#'))
             .collect();
         if args.is_empty() {
-            return Err(self.error(
-                line_no,
-                line.len() + 1,
-                ParseErrorKind::FieldCount {
-                    tag: "FIX".into(),
-                    expected: 1,
-                    found: 0,
-                    layout: "one or more vertex ids",
-                },
-            ));
+            // Just past the tag: a trailing comment is not where the ids were expected.
+            let col = fields[0].col + fields[0].text.len();
+            return Err(self.error(line_no, col, ParseErrorKind::NoFixIds));
         }
         for f in args {
             let id = self.id(line_no, f)?;
