@@ -37,20 +37,24 @@ pub fn solve_dual(m: &Mat<c64>, solver: SdpSolver) -> Result<DualSolution, SdpEr
     match solver {
         SdpSolver::Ipm => {
             // A relative gap of 1e-10 is out of reach in double precision on badly scaled
-            // graphs (d* far below the entries of M); accept 1e-8, then 1e-6 there. The bound
-            // reported is proven for whatever λ is returned (see crate::certify).
-            let mut result = Err(SdpError::InvalidInput);
-            for tolerance in [1e-10, 1e-8, 1e-6] {
+            // graphs (d* far below the entries of M); accept 1e-8, then 1e-6 there, and past
+            // that the last (dual feasible) iterate, marked not converged. The bound reported
+            // is proven for whatever λ is returned (see crate::certify).
+            for tolerance in [1e-10, 1e-8] {
                 let options = crate::sdp::ipm::IpmOptions {
                     tolerance,
                     ..Default::default()
                 };
-                result = crate::sdp::ipm::solve(m.as_ref(), &options);
+                let result = crate::sdp::ipm::solve(m.as_ref(), &options);
                 if !matches!(result, Err(SdpError::NotConverged { .. })) {
-                    break;
+                    return result;
                 }
             }
-            result
+            let options = crate::sdp::ipm::IpmOptions {
+                tolerance: 1e-6,
+                ..Default::default()
+            };
+            crate::sdp::ipm::solve_best_effort(m.as_ref(), &options)
         }
         #[cfg(feature = "clarabel-sdp")]
         SdpSolver::Clarabel => crate::sdp::clarabel::solve(m.as_ref()),
@@ -101,20 +105,66 @@ pub struct ComponentSolution {
 }
 
 /// Runs Algorithm 1 on a connected graph.
+///
+/// The weights are first divided by the power of two nearest their largest value, and the
+/// results multiplied back (exactly, so the bound stays proven): f*(cτ, cκ) = c·f*(τ, κ), and
+/// the solver's tolerances, which are relative with a floor of one (a graph with f* = 0 has no
+/// relative gap), then act the same on a graph whose information matrices are all 1e-9 or all
+/// 1e9 as on one whose are 1.
 pub fn solve_connected(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
     solver: SdpSolver,
 ) -> Result<ComponentSolution, Error> {
+    let largest = weights
+        .iter()
+        .fold(0.0f64, |m, w| m.max(w.tau).max(w.kappa));
+    let scale = if largest > 0.0 && largest.is_finite() {
+        2f64.powi((largest.log2().round() as i32).clamp(-1000, 1000))
+    } else {
+        1.0
+    };
+    if scale == 1.0 {
+        return solve_normalized(graph, weights, weights, solver);
+    }
+    let normalized: Vec<EdgeWeight> = weights
+        .iter()
+        .map(|w| EdgeWeight {
+            tau: w.tau / scale,
+            kappa: w.kappa / scale,
+        })
+        .collect();
+    let mut s = solve_normalized(graph, &normalized, weights, solver)?;
+    // W̃ and f are linear in the weights: W̃(λ) of the original weights is scale · W̃(λ / scale)
+    // of the normalized ones (same eigenvectors), and the cost is recomputed as it is.
+    s.cost = cost(graph, weights, &s.poses);
+    s.lower_bound *= scale;
+    s.dual_objective *= scale;
+    s.lambda.iter_mut().for_each(|l| *l *= scale);
+    s.eigenvalues.iter_mut().for_each(|e| *e *= scale);
+    s.dual.lambda.iter_mut().for_each(|l| *l *= scale);
+    s.dual.dual_objective *= scale;
+    s.dual.primal_objective *= scale;
+    s.matrix = PoseGraphMatrix::new(graph, weights);
+    Ok(s)
+}
+
+/// Algorithm 1 with `weights`; `original` are the weights the user's graph has (for messages).
+fn solve_normalized(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    original: &[EdgeWeight],
+    solver: SdpSolver,
+) -> Result<ComponentSolution, Error> {
     let matrix = PoseGraphMatrix::new(graph, weights);
     let m = matrix
         .rotation_matrix()
-        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
+        .ok_or_else(|| singular_laplacian(graph, original))?;
     let t = Instant::now();
     let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
     let sdp_seconds = t.elapsed().as_secs_f64();
-    let bound = dual_bound(&matrix, &dual.lambda)
-        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
+    let bound =
+        dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(graph, original))?;
     let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);
     let zeros = near_zero(&bound.eigenvalues, threshold);
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
@@ -148,6 +198,22 @@ pub fn solve_connected(
         sdp_seconds,
         matrix,
     })
+}
+
+/// Why the anchored Laplacian L of `graph` could not be factored: the graph is disconnected, or
+/// (connected, so L ≻ 0 in exact arithmetic) its translation weights span a range that double
+/// precision cannot resolve, e.g. 1e-9 next to 1e9: light edges then vanish in the rounding of
+/// the heavy ones.
+pub fn singular_laplacian(graph: &PoseGraph, weights: &[EdgeWeight]) -> Error {
+    if graph.connected_components().1 != 1 {
+        return Error::Invalid("the graph is not connected".into());
+    }
+    let (lo, hi) = weights.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+        (lo.min(w.tau), hi.max(w.tau))
+    });
+    Error::Invalid(format!(
+        "the weighted Laplacian of this connected graph is numerically singular: its translation weights range from {lo:e} to {hi:e}, too wide for double precision (edges that light are lost in the rounding of the heavy ones); rescale the information matrices or use --weights unit"
+    ))
 }
 
 /// Poses from (unnormalized) rotation entries: each rotation normalized to unit modulus, the

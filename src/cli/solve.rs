@@ -87,6 +87,9 @@ pub struct ComponentReport {
     /// The smallest eigenvalues of W(lambda*), ascending (at most 4).
     pub penalized_eigenvalues: Vec<f64>,
     pub sdp_iterations: usize,
+    /// Whether the SDP solver reached its tolerance (if not, the bound is proven all the same,
+    /// from the dual feasible multipliers it reached, and only weaker).
+    pub sdp_converged: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -115,6 +118,8 @@ pub struct Report {
     pub certified: bool,
     pub szep: bool,
     pub near_zero_eigenvalues: usize,
+    /// Whether the SDP solver reached its tolerance on every component.
+    pub sdp_converged: bool,
     pub components: Vec<ComponentReport>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
@@ -172,8 +177,9 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     let write_s = t2.elapsed().as_secs_f64();
 
-    let cost: f64 = components.iter().map(|c| c.cost).sum();
-    let lower_bound: f64 = components.iter().map(|c| c.lower_bound).sum();
+    // Folded from +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
+    let cost = components.iter().fold(0.0, |a, c| a + c.cost);
+    let lower_bound = components.iter().fold(0.0, |a, c| a + c.lower_bound);
     let suboptimality_bound = cost - lower_bound;
     let report = Report {
         method: args.method,
@@ -188,6 +194,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         certified: components.iter().all(|c| c.certified),
         szep: components.iter().all(|c| c.szep),
         near_zero_eigenvalues: components.iter().map(|c| c.near_zero_eigenvalues).sum(),
+        sdp_converged: components.iter().all(|c| c.sdp_converged),
         components,
         timings: (!args.no_timings).then_some(Timings {
             read_s,
@@ -222,6 +229,7 @@ fn component_report(
         rounding: s.rounding,
         penalized_eigenvalues: s.eigenvalues.iter().take(4).copied().collect(),
         sdp_iterations: s.dual.iterations,
+        sdp_converged: s.dual.converged,
     }
 }
 
@@ -261,6 +269,13 @@ fn text_report(input: &str, r: &Report) -> String {
             )
         },
     );
+    if !r.sdp_converged {
+        out += &row(
+            "SDP",
+            "did not converge: the bound is that of the dual feasible multipliers reached"
+                .to_string(),
+        );
+    }
     for (k, c) in r.components.iter().enumerate() {
         if r.components.len() > 1 {
             out += &row(

@@ -2,7 +2,7 @@
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
 use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
-use crate::algorithm1::{SdpSolver, solve_dual};
+use crate::algorithm1::{SdpSolver, singular_laplacian, solve_dual};
 use crate::certify::dual_bound;
 use crate::error::Error;
 use crate::matrix::PoseGraphMatrix;
@@ -67,6 +67,8 @@ pub struct ComponentSpectrum {
     pub lambda: Vec<f64>,
     /// The proven lower bound on f* (see pgo-solve).
     pub lower_bound: f64,
+    /// Whether the SDP solver reached its tolerance (see pgo-solve).
+    pub sdp_converged: bool,
 }
 
 /// What `--json` prints; lists are ascending.
@@ -86,6 +88,8 @@ pub struct Report {
     pub szep: bool,
     pub tree: bool,
     pub balanced: bool,
+    /// Whether the SDP solver reached its tolerance on every component.
+    pub sdp_converged: bool,
     pub components: Vec<ComponentSpectrum>,
 }
 
@@ -116,10 +120,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         let matrix = PoseGraphMatrix::new(&part, &weights);
         let m = matrix
             .rotation_matrix()
-            .ok_or_else(|| Error::Invalid("a component is not connected".into()))?;
+            .ok_or_else(|| singular_laplacian(&part, &weights))?;
         let dual = solve_dual(&m, args.solver).map_err(|e| Error::Invalid(e.to_string()))?;
-        let bound = dual_bound(&matrix, &dual.lambda)
-            .ok_or_else(|| Error::Invalid("a component is not connected".into()))?;
+        let bound =
+            dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(&part, &weights))?;
         let zeros = near_zero(
             &bound.eigenvalues,
             zero_threshold(&matrix, dual.primal_objective - dual.dual_objective),
@@ -138,6 +142,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             dual_objective: dual.dual_objective,
             lambda: dual.lambda.clone(),
             lower_bound: bound.lower_bound,
+            sdp_converged: dual.converged,
         });
     }
     let merge = |f: fn(&ComponentSpectrum) -> &Vec<f64>| {
@@ -160,6 +165,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         szep: components.iter().all(|c| c.szep),
         tree: components.iter().all(|c| c.tree),
         balanced: components.iter().all(|c| c.balanced),
+        sdp_converged: components.iter().all(|c| c.sdp_converged),
         components,
     };
     let text = if args.json {
