@@ -53,11 +53,13 @@ fn classify(tag: &[u8]) -> Tag {
     }
 }
 
+/// A vertex line as read (32 bytes: positions are 32-bit like [`EdgeSite`]'s, as the table
+/// of raw vertices is the largest the reader holds besides the graph).
 pub(super) struct RawVertex {
     pub(super) id: VertexId,
+    pub(super) line: u32,
+    pub(super) col: u32,
     pub(super) pose: Pose2,
-    pub(super) line: usize,
-    pub(super) col: usize,
 }
 
 /// Where an edge line's fields are, for messages after the whole file is read (32-bit to keep
@@ -397,8 +399,8 @@ impl BlockParser<'_> {
         self.block.vertices.push(RawVertex {
             id,
             pose: Pose2::new(v[0], v[1], v[2]),
-            line,
-            col,
+            line: narrow(line),
+            col: narrow(col),
         });
     }
 
