@@ -224,3 +224,55 @@ impl Dir {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+// ---------------------------------------------------------------------------------------------
+// Large generated inputs.
+
+/// Writes a deterministic g2o text of about `mb` megabytes to `out`: a chain of vertices and
+/// edges with varied number syntax, plus loop closures. Returns the number of lines written.
+pub fn write_generated(mb: usize, out: &mut impl std::io::Write) -> std::io::Result<usize> {
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let n = mb * 11_500;
+    let mut lines = 0;
+    for k in 0..n {
+        let r = next();
+        writeln!(
+            out,
+            "VERTEX_SE2 {k} {}.{} -{}e-3 {}",
+            r % 1000,
+            r % 97,
+            r % 5000,
+            (r % 6283) as f64 / 1000.0
+        )?;
+        lines += 1;
+    }
+    for k in 0..n {
+        let r = next();
+        let j = if k + 1 < n && r % 5 != 0 {
+            k + 1
+        } else {
+            (r as usize) % n
+        };
+        if j == k {
+            continue;
+        }
+        writeln!(
+            out,
+            "EDGE_SE2 {k} {j} 1.{} 0.00{} -{}.5 {} 0 0 {} 0 {}",
+            r % 1000,
+            r % 89,
+            r % 3,
+            1 + r % 400,
+            1 + r % 300,
+            1 + r % 700
+        )?;
+        lines += 1;
+    }
+    Ok(lines)
+}
