@@ -12,7 +12,7 @@
 //! A graph with several connected components is solved component by component (the paper's
 //! remark after Assumption 1).
 
-use crate::certify::dual_bound;
+use crate::certify::{DualBound, dual_bound};
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
 use crate::matrix::{PoseGraphMatrix, cost, rotation};
@@ -104,18 +104,32 @@ pub struct ComponentSolution {
     pub matrix: PoseGraphMatrix,
 }
 
-/// Runs Algorithm 1 on a connected graph.
-///
-/// The weights are first divided by the power of two nearest their largest value, and the
-/// results multiplied back (exactly, so the bound stays proven): f*(cτ, cκ) = c·f*(τ, κ), and
-/// the solver's tolerances, which are relative with a floor of one (a graph with f* = 0 has no
-/// relative gap), then act the same on a graph whose information matrices are all 1e-9 or all
-/// 1e9 as on one whose are 1.
-pub fn solve_connected(
+/// The dual side of Algorithm 1 on a connected graph, in units of the normalized weights:
+/// the weights divided by `scale`, the power of two nearest their largest value. W̃, M, λ*, the
+/// bound and the eigenvalues are linear in the weights, so multiplying them by `scale` (exactly)
+/// gives those of the graph's own weights, the bound still proven; the eigenvectors are the same.
+/// The solver's tolerances are relative with a floor of one (a graph with f* = 0 has no relative
+/// gap), so normalizing makes them act the same on a graph whose information matrices are all
+/// 1e-9 or all 1e9 as on one whose are 1, and keeps W̃ finite for weights near 1e±300.
+pub struct DualAnalysis {
+    /// W̃ of the normalized weights.
+    pub matrix: PoseGraphMatrix,
+    /// M of the normalized weights.
+    pub m: Mat<c64>,
+    pub dual: DualSolution,
+    pub bound: DualBound,
+    /// Eigenvalues of W̃(λ*) at zero.
+    pub near_zero: usize,
+    pub sdp_seconds: f64,
+    pub scale: f64,
+}
+
+/// Solves the dual SDP of a connected graph and proves its bound (see [`DualAnalysis`]).
+pub fn analyze(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
     solver: SdpSolver,
-) -> Result<ComponentSolution, Error> {
+) -> Result<DualAnalysis, Error> {
     let largest = weights
         .iter()
         .fold(0.0f64, |m, w| m.max(w.tau).max(w.kappa));
@@ -124,9 +138,6 @@ pub fn solve_connected(
     } else {
         1.0
     };
-    if scale == 1.0 {
-        return solve_normalized(graph, weights, weights, solver);
-    }
     let normalized: Vec<EdgeWeight> = weights
         .iter()
         .map(|w| EdgeWeight {
@@ -134,39 +145,41 @@ pub fn solve_connected(
             kappa: w.kappa / scale,
         })
         .collect();
-    let mut s = solve_normalized(graph, &normalized, weights, solver)?;
-    // W̃ and f are linear in the weights: W̃(λ) of the original weights is scale · W̃(λ / scale)
-    // of the normalized ones (same eigenvectors), and the cost is recomputed as it is.
-    s.cost = cost(graph, weights, &s.poses);
-    s.lower_bound *= scale;
-    s.dual_objective *= scale;
-    s.lambda.iter_mut().for_each(|l| *l *= scale);
-    s.eigenvalues.iter_mut().for_each(|e| *e *= scale);
-    s.dual.lambda.iter_mut().for_each(|l| *l *= scale);
-    s.dual.dual_objective *= scale;
-    s.dual.primal_objective *= scale;
-    s.matrix = PoseGraphMatrix::new(graph, weights);
-    Ok(s)
-}
-
-/// Algorithm 1 with `weights`; `original` are the weights the user's graph has (for messages).
-fn solve_normalized(
-    graph: &PoseGraph,
-    weights: &[EdgeWeight],
-    original: &[EdgeWeight],
-    solver: SdpSolver,
-) -> Result<ComponentSolution, Error> {
-    let matrix = PoseGraphMatrix::new(graph, weights);
-    let m = matrix
-        .rotation_matrix()
-        .ok_or_else(|| singular_laplacian(graph, original))?;
+    let (matrix, m) = matrices(graph, &normalized, weights)?;
     let t = Instant::now();
     let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
     let sdp_seconds = t.elapsed().as_secs_f64();
     let bound =
-        dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(graph, original))?;
+        dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(graph, weights))?;
     let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);
-    let zeros = near_zero(&bound.eigenvalues, threshold);
+    let near_zero = near_zero(&bound.eigenvalues, threshold);
+    Ok(DualAnalysis {
+        matrix,
+        m,
+        dual,
+        bound,
+        near_zero,
+        sdp_seconds,
+        scale,
+    })
+}
+
+/// Runs Algorithm 1 on a connected graph (the dual side by [`analyze`]); every number is in
+/// the units of `weights`.
+pub fn solve_connected(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    solver: SdpSolver,
+) -> Result<ComponentSolution, Error> {
+    let DualAnalysis {
+        matrix,
+        dual,
+        bound,
+        near_zero: zeros,
+        sdp_seconds,
+        scale,
+        ..
+    } = analyze(graph, weights, solver)?;
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
     let szep = zeros <= 1;
     let n = graph.num_poses();
@@ -184,20 +197,72 @@ fn solve_normalized(
         Rounding::NullSpace
     };
     let poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut dual = dual;
+    dual.lambda.iter_mut().for_each(|l| *l *= scale);
+    dual.dual_objective *= scale;
+    dual.primal_objective *= scale;
     Ok(ComponentSolution {
         cost: cost(graph, weights, &poses),
         poses,
-        lower_bound: bound.lower_bound,
+        lower_bound: bound.lower_bound * scale,
         dual_objective: dual.dual_objective,
         lambda: dual.lambda.clone(),
-        eigenvalues: bound.eigenvalues,
+        eigenvalues: bound.eigenvalues.iter().map(|e| e * scale).collect(),
         near_zero: zeros,
         szep,
         rounding,
         dual,
         sdp_seconds,
-        matrix,
+        matrix: if scale == 1.0 {
+            matrix
+        } else {
+            PoseGraphMatrix::new(graph, weights)
+        },
     })
+}
+
+/// W̃ of `graph` with `weights` and its rotation-only matrix M, or why they cannot be computed
+/// in double precision: an edge's weighted squared translation τ|Δ|² overflows (named by its
+/// ids, with `original`, the weights of the user's graph), or a sum of them does, or L is
+/// singular ([`singular_laplacian`]).
+pub fn matrices(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    original: &[EdgeWeight],
+) -> Result<(PoseGraphMatrix, Mat<c64>), Error> {
+    for ((e, w), o) in graph.edges.iter().zip(weights).zip(original) {
+        let length = e.measurement.x.hypot(e.measurement.y);
+        let term = w.tau * length * length + w.kappa;
+        if !term.is_finite() {
+            let mut weight = Vec::new();
+            crate::io::format_f64(o.tau, &mut weight);
+            return Err(Error::Invalid(format!(
+                "edge {} -> {}: its translation of {length:e} m, squared and weighted by {}, overflows a 64-bit float, so the cost cannot be evaluated",
+                graph.ids[e.i],
+                graph.ids[e.j],
+                String::from_utf8_lossy(&weight)
+            )));
+        }
+    }
+    let matrix = PoseGraphMatrix::new(graph, weights);
+    let finite = |m: &Mat<c64>| {
+        (0..m.ncols())
+            .all(|c| (0..m.nrows()).all(|r| m[(r, c)].re.is_finite() && m[(r, c)].im.is_finite()))
+    };
+    if !finite(&matrix.dense()) {
+        return Err(Error::Invalid(
+            "the pose graph matrix overflows a 64-bit float: the weighted squared translations of the edges at one pose add up to more than 1.8e308".into(),
+        ));
+    }
+    let m = matrix
+        .rotation_matrix()
+        .ok_or_else(|| singular_laplacian(graph, original))?;
+    if !finite(&m) {
+        return Err(Error::Invalid(
+            "the rotation matrix M = Q - S* L^-1 S of this graph overflows a 64-bit float: its translations are too long for its weights".into(),
+        ));
+    }
+    Ok((matrix, m))
 }
 
 /// Why the anchored Laplacian L of `graph` could not be factored: the graph is disconnected, or

@@ -103,10 +103,10 @@ fn weights(info: &[f64; 6], isotropic: bool) -> (f64, f64) {
     if !isotropic {
         return (1.0, 1.0);
     }
-    let [a, b, _, d, _, f] = *info;
-    let det = a * d - b * b;
-    // tr(Omega_tt^-1) = (a + d) / det.
-    (2.0 * det / (a + d), 2.0 * f)
+    // tr(Omega_tt^-1) = (a + d) / det, on Omega_tt / s so that det stays finite near 1e200.
+    let s = info[0].max(info[3]);
+    let [a, b, _, d, _, f] = info.map(|v| v / s);
+    (2.0 * s * ((a * d - b * b) / (a + d)), 2.0 * f * s)
 }
 
 /// f = sum tau |p_j - p_i - R_i t|^2 + kappa |e^{i th_j} - e^{i th_i} e^{i dth}|^2 (eq. (5)
@@ -436,5 +436,43 @@ fn weights_from_1e_minus_9_to_1e9() {
     every_tool("skewed", &skewed, true);
     if solve(&skewed, true).is_ok() {
         check_sound("skewed", &skewed, true, None);
+    }
+}
+
+#[test]
+fn values_whose_squares_overflow_are_refused_naming_the_edge() {
+    // A 1e200 m translation: tau |t|^2 = 1e400. Reading and converting are fine; the cost
+    // cannot be evaluated, and the tools that evaluate it say which edge.
+    let mut g = from_truth(3, 1.0, &cycle_pairs(3), 0.0, 11);
+    g.edges[1].2[0] = 1e200;
+    let dir = Dir::new();
+    let input = dir.file("in.g2o", g.g2o().as_bytes());
+    for tool in input_tools() {
+        let output = dir.path("out.g2o");
+        let _ = std::fs::remove_file(&output);
+        let out = run_tool(&tool, &input, Some(&output), &[]);
+        let err = text(&out.stderr);
+        assert!(exited_normally(&out), "{}: {err}", tool.name);
+        if tool.name == "pgo-convert" {
+            assert_eq!(out.status.code(), Some(0), "{err}");
+            continue;
+        }
+        assert_eq!(out.status.code(), Some(2), "{}: {err}", tool.name);
+        assert!(
+            err.contains("edge 1 -> 2: its translation of 1e200 m") && err.contains("overflows"),
+            "{}: {err}",
+            tool.name
+        );
+        assert!(!output.exists());
+    }
+    // Information 1e200 and 1e-200: representable weights, solved and certified.
+    for scale in [1e200, 1e-200] {
+        let mut g = from_truth(4, 2.0, &cycle_pairs(4), 0.05, 12);
+        for e in &mut g.edges {
+            e.3 = [scale, 0.0, 0.0, scale, 0.0, scale];
+        }
+        every_tool("extreme information", &g, false);
+        check_sound("extreme information", &g, true, None);
+        assert!(certified(&g, true), "{scale}");
     }
 }
