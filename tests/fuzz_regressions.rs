@@ -8,8 +8,11 @@ mod oracle;
 
 use std::path::Path;
 
-/// The fuzz targets and what each runs on an input.
-const TARGETS: [(&str, fn(&[u8])); 4] = [
+/// What a fuzz target runs on an input.
+type Check = fn(&[u8]);
+
+/// The fuzz targets and their checks.
+const TARGETS: [(&str, Check); 4] = [
     ("read_g2o", |d| oracle::check_reader(d, "fuzz.g2o")),
     ("read_toro", |d| oracle::check_reader(d, "fuzz.graph")),
     ("read_auto", |d| oracle::check_reader(d, "fuzz.txt")),
