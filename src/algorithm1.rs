@@ -245,11 +245,31 @@ pub fn matrices(
         }
     }
     let matrix = PoseGraphMatrix::new(graph, weights);
+    // The proven bound takes the Frobenius norm of W̃(λ) (crate::certify): its square must be
+    // finite, so no entry may reach about 1e154. With the weights normalized to at most about
+    // one, only translations that long do that; the longest is named.
+    let dense = matrix.dense();
+    let fro2: f64 = (0..dense.ncols())
+        .flat_map(|c| (0..dense.nrows()).map(move |r| (r, c)))
+        .map(|(r, c)| dense[(r, c)].norm_sqr())
+        .sum();
+    if !fro2.is_finite() {
+        let (e, length) = graph
+            .edges
+            .iter()
+            .map(|e| (e, e.measurement.x.hypot(e.measurement.y)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("a graph with entries has edges");
+        return Err(Error::Invalid(format!(
+            "edge {} -> {}: its translation of {length:e} m makes entries of the pose graph matrix too large for the eigenvalue bounds in double precision (their squares overflow); rescale the translations",
+            graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
     let finite = |m: &Mat<c64>| {
         (0..m.ncols())
             .all(|c| (0..m.nrows()).all(|r| m[(r, c)].re.is_finite() && m[(r, c)].im.is_finite()))
     };
-    if !finite(&matrix.dense()) {
+    if !finite(&dense) {
         return Err(Error::Invalid(
             "the pose graph matrix overflows a 64-bit float: the weighted squared translations of the edges at one pose add up to more than 1.8e308".into(),
         ));
@@ -301,19 +321,31 @@ pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose
         .expect("the graph is connected");
     let x: Vec<c64> = rho.into_iter().chain(unit).collect();
     let poses = matrix.poses(&x);
-    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 = 0 to the anchor's.
-    let phi = anchor.theta - poses[0].theta;
+    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 = 0 to the anchor's. φ is
+    // taken from the anchor's angle reduced to (-π, π] (by the rotation e^{iθ}, whose argument
+    // reduction is exact): an anchor angle of 1e300 added to every θ would erase the differences
+    // between them.
+    let phi = rotation(anchor.theta).arg() - poses[0].theta;
     let turn = rotation(phi);
-    let mut moved: Vec<Pose2> = poses
-        .iter()
-        .map(|p| {
-            let q = turn * c64::new(p.x, p.y);
-            Pose2::new(anchor.x + q.re, anchor.y + q.im, p.theta + phi)
-        })
-        .collect();
-    // Exactly, not up to the rounding of θ_0 + φ.
-    moved[0] = anchor;
-    moved
+    let place = |at: Pose2| -> Vec<Pose2> {
+        let mut moved: Vec<Pose2> = poses
+            .iter()
+            .map(|p| {
+                let q = turn * c64::new(p.x, p.y);
+                Pose2::new(at.x + q.re, at.y + q.im, p.theta + phi)
+            })
+            .collect();
+        // Exactly, not up to the rounding of θ_0 + φ.
+        moved[0] = at;
+        moved
+    };
+    let moved = place(anchor);
+    if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+        return moved;
+    }
+    // Positions that overflow next to the anchor's (near 1.8e308): pose 0 at the origin instead
+    // (f does not depend on where the estimate is).
+    place(Pose2::new(0.0, 0.0, anchor.theta))
 }
 
 /// The comparison roundings of Sec. 5.2 and Sec. 6 from a solved component: the eigenvector
