@@ -84,6 +84,63 @@ fn every_malformed_input_is_an_error_at_its_place_from_every_tool() {
             let mut want = vec![name.clone(), format!("out-{name}")];
             want.sort();
             assert_eq!(dir.entries(), want, "{what}");
+
+            // The same on stdin (the format then comes from the tags).
+            let mut args: Vec<&str> = vec!["-"; tool.inputs];
+            args.extend(flags(flag_field));
+            let out = common::run_with_stdin(&tool.name, &args, Some(&content));
+            assert_eq!(out.status.code(), Some(2), "{what} on stdin");
+            assert_eq!(
+                text(&out.stderr),
+                format!("<stdin>:{at}: error: {message}\n"),
+                "{what} on stdin"
+            );
+            assert!(out.stdout.is_empty(), "{what} on stdin");
+        }
+    }
+}
+
+/// Files that cannot be read or written: a missing input, a directory, an output in a missing
+/// directory. Every tool: status 2, one line naming the path, nothing written.
+#[test]
+fn unreadable_inputs_and_unwritable_outputs_are_errors_from_every_tool() {
+    let clean = std::fs::read(corpus("tolerated").join("clean.g2o")).unwrap();
+    for tool in input_tools() {
+        let dir = Dir::new();
+        let input = dir.file("in.g2o", &clean);
+        let missing = dir.path("missing.g2o");
+        let cases = [
+            (
+                missing.clone(),
+                dir.path("out.g2o"),
+                s(&missing).to_string(),
+            ),
+            (
+                dir.0.path().to_path_buf(),
+                dir.path("out.g2o"),
+                s(dir.0.path()).to_string(),
+            ),
+            (
+                input.clone(),
+                dir.path("no/such/dir/out.g2o"),
+                "no/such/dir/out.g2o".into(),
+            ),
+        ];
+        for (input_path, output, named) in cases {
+            if !tool.writes && output.ends_with("no/such/dir/out.g2o") {
+                continue;
+            }
+            let out = run_tool(&tool, &input_path, Some(&output), &[]);
+            let err = text(&out.stderr);
+            let what = format!("{} {}", tool.name, input_path.display());
+            assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+            assert_eq!(err.lines().count(), 1, "{what}: {err}");
+            assert!(
+                err.starts_with(&format!("{}: error: ", tool.name)),
+                "{what}: {err}"
+            );
+            assert!(err.contains(&named), "{what}: {err}");
+            assert_eq!(dir.entries(), ["in.g2o"], "{what}");
         }
     }
 }
