@@ -322,10 +322,15 @@ pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose
     let x: Vec<c64> = rho.into_iter().chain(unit).collect();
     let poses = matrix.poses(&x);
     // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 = 0 to the anchor's. φ is
-    // taken from the anchor's angle reduced to (-π, π] (by the rotation e^{iθ}, whose argument
-    // reduction is exact): an anchor angle of 1e300 added to every θ would erase the differences
-    // between them.
-    let phi = rotation(anchor.theta).arg() - poses[0].theta;
+    // taken from the anchor's angle reduced to [-π, π] (if outside, by the rotation e^{iθ}, whose
+    // argument reduction is exact): an anchor angle of 1e30 added to every θ would erase the
+    // differences between them.
+    let anchor_angle = if anchor.theta.abs() <= std::f64::consts::PI {
+        anchor.theta
+    } else {
+        rotation(anchor.theta).arg()
+    };
+    let phi = anchor_angle - poses[0].theta;
     let turn = rotation(phi);
     let place = |at: Pose2| -> Vec<Pose2> {
         let mut moved: Vec<Pose2> = poses
