@@ -12,7 +12,7 @@
 //! A graph with several connected components is solved component by component (the paper's
 //! remark after Assumption 1).
 
-use crate::certify::dual_bound;
+use crate::certify::{DualBound, dual_bound};
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
 use crate::matrix::{PoseGraphMatrix, cost, rotation};
@@ -37,20 +37,24 @@ pub fn solve_dual(m: &Mat<c64>, solver: SdpSolver) -> Result<DualSolution, SdpEr
     match solver {
         SdpSolver::Ipm => {
             // A relative gap of 1e-10 is out of reach in double precision on badly scaled
-            // graphs (d* far below the entries of M); accept 1e-8, then 1e-6 there. The bound
-            // reported is proven for whatever λ is returned (see crate::certify).
-            let mut result = Err(SdpError::InvalidInput);
-            for tolerance in [1e-10, 1e-8, 1e-6] {
+            // graphs (d* far below the entries of M); accept 1e-8, then 1e-6 there, and past
+            // that the last (dual feasible) iterate, marked not converged. The bound reported
+            // is proven for whatever λ is returned (see crate::certify).
+            for tolerance in [1e-10, 1e-8] {
                 let options = crate::sdp::ipm::IpmOptions {
                     tolerance,
                     ..Default::default()
                 };
-                result = crate::sdp::ipm::solve(m.as_ref(), &options);
+                let result = crate::sdp::ipm::solve(m.as_ref(), &options);
                 if !matches!(result, Err(SdpError::NotConverged { .. })) {
-                    break;
+                    return result;
                 }
             }
-            result
+            let options = crate::sdp::ipm::IpmOptions {
+                tolerance: 1e-6,
+                ..Default::default()
+            };
+            crate::sdp::ipm::solve_best_effort(m.as_ref(), &options)
         }
         #[cfg(feature = "clarabel-sdp")]
         SdpSolver::Clarabel => crate::sdp::clarabel::solve(m.as_ref()),
@@ -100,23 +104,82 @@ pub struct ComponentSolution {
     pub matrix: PoseGraphMatrix,
 }
 
-/// Runs Algorithm 1 on a connected graph.
+/// The dual side of Algorithm 1 on a connected graph, in units of the normalized weights:
+/// the weights divided by `scale`, the power of two nearest their largest value. W̃, M, λ*, the
+/// bound and the eigenvalues are linear in the weights, so multiplying them by `scale` (exactly)
+/// gives those of the graph's own weights, the bound still proven; the eigenvectors are the same.
+/// The solver's tolerances are relative with a floor of one (a graph with f* = 0 has no relative
+/// gap), so normalizing makes them act the same on a graph whose information matrices are all
+/// 1e-9 or all 1e9 as on one whose are 1, and keeps W̃ finite for weights near 1e±300.
+pub struct DualAnalysis {
+    /// W̃ of the normalized weights.
+    pub matrix: PoseGraphMatrix,
+    /// M of the normalized weights.
+    pub m: Mat<c64>,
+    pub dual: DualSolution,
+    pub bound: DualBound,
+    /// Eigenvalues of W̃(λ*) at zero.
+    pub near_zero: usize,
+    pub sdp_seconds: f64,
+    pub scale: f64,
+}
+
+/// Solves the dual SDP of a connected graph and proves its bound (see [`DualAnalysis`]).
+pub fn analyze(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    solver: SdpSolver,
+) -> Result<DualAnalysis, Error> {
+    let largest = weights
+        .iter()
+        .fold(0.0f64, |m, w| m.max(w.tau).max(w.kappa));
+    let scale = if largest > 0.0 && largest.is_finite() {
+        2f64.powi((largest.log2().round() as i32).clamp(-1000, 1000))
+    } else {
+        1.0
+    };
+    let normalized: Vec<EdgeWeight> = weights
+        .iter()
+        .map(|w| EdgeWeight {
+            tau: w.tau / scale,
+            kappa: w.kappa / scale,
+        })
+        .collect();
+    let (matrix, m) = matrices(graph, &normalized, weights)?;
+    let t = Instant::now();
+    let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
+    let sdp_seconds = t.elapsed().as_secs_f64();
+    let bound =
+        dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(graph, weights))?;
+    let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);
+    let near_zero = near_zero(&bound.eigenvalues, threshold);
+    Ok(DualAnalysis {
+        matrix,
+        m,
+        dual,
+        bound,
+        near_zero,
+        sdp_seconds,
+        scale,
+    })
+}
+
+/// Runs Algorithm 1 on a connected graph (the dual side by [`analyze`]); every number is in
+/// the units of `weights`.
 pub fn solve_connected(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
     solver: SdpSolver,
 ) -> Result<ComponentSolution, Error> {
-    let matrix = PoseGraphMatrix::new(graph, weights);
-    let m = matrix
-        .rotation_matrix()
-        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
-    let t = Instant::now();
-    let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
-    let sdp_seconds = t.elapsed().as_secs_f64();
-    let bound = dual_bound(&matrix, &dual.lambda)
-        .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
-    let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);
-    let zeros = near_zero(&bound.eigenvalues, threshold);
+    let DualAnalysis {
+        matrix,
+        dual,
+        bound,
+        near_zero: zeros,
+        sdp_seconds,
+        scale,
+        ..
+    } = analyze(graph, weights, solver)?;
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
     let szep = zeros <= 1;
     let n = graph.num_poses();
@@ -134,20 +197,120 @@ pub fn solve_connected(
         Rounding::NullSpace
     };
     let poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut dual = dual;
+    dual.lambda.iter_mut().for_each(|l| *l *= scale);
+    dual.dual_objective *= scale;
+    dual.primal_objective *= scale;
     Ok(ComponentSolution {
         cost: cost(graph, weights, &poses),
         poses,
-        lower_bound: bound.lower_bound,
+        lower_bound: bound.lower_bound * scale,
         dual_objective: dual.dual_objective,
         lambda: dual.lambda.clone(),
-        eigenvalues: bound.eigenvalues,
+        eigenvalues: bound.eigenvalues.iter().map(|e| e * scale).collect(),
         near_zero: zeros,
         szep,
         rounding,
         dual,
         sdp_seconds,
-        matrix,
+        matrix: if scale == 1.0 {
+            matrix
+        } else {
+            PoseGraphMatrix::new(graph, weights)
+        },
     })
+}
+
+/// Refuses a graph whose edge terms τ|Δ|² + κ overflow a 64-bit float (the cost cannot be
+/// evaluated), naming the edge by its ids; `original` are the weights as the user's graph has
+/// them (for the message), `weights` those the matrices are built from.
+pub fn check_edge_terms(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    original: &[EdgeWeight],
+) -> Result<(), Error> {
+    for ((e, w), o) in graph.edges.iter().zip(weights).zip(original) {
+        let length = e.measurement.x.hypot(e.measurement.y);
+        let term = w.tau * length * length + w.kappa;
+        if !term.is_finite() {
+            let mut weight = Vec::new();
+            crate::io::format_f64(o.tau, &mut weight);
+            return Err(Error::Invalid(format!(
+                "edge {} -> {}: its translation of {length:e} m, squared and weighted by {}, overflows a 64-bit float, so the cost cannot be evaluated",
+                graph.ids[e.i],
+                graph.ids[e.j],
+                String::from_utf8_lossy(&weight)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// W̃ of `graph` with `weights` and its rotation-only matrix M, or why they cannot be computed
+/// in double precision: an edge's weighted squared translation τ|Δ|² overflows (named by its
+/// ids, with `original`, the weights of the user's graph), or a sum of them does, or L is
+/// singular ([`singular_laplacian`]).
+pub fn matrices(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    original: &[EdgeWeight],
+) -> Result<(PoseGraphMatrix, Mat<c64>), Error> {
+    check_edge_terms(graph, weights, original)?;
+    let matrix = PoseGraphMatrix::new(graph, weights);
+    // The proven bound takes the Frobenius norm of W̃(λ) (crate::certify): its square must be
+    // finite, so no entry may reach about 1e154. With the weights normalized to at most about
+    // one, only translations that long do that; the longest is named.
+    let dense = matrix.dense();
+    let fro2: f64 = (0..dense.ncols())
+        .flat_map(|c| (0..dense.nrows()).map(move |r| (r, c)))
+        .map(|(r, c)| dense[(r, c)].norm_sqr())
+        .sum();
+    if !fro2.is_finite() {
+        let (e, length) = graph
+            .edges
+            .iter()
+            .map(|e| (e, e.measurement.x.hypot(e.measurement.y)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("a graph with entries has edges");
+        return Err(Error::Invalid(format!(
+            "edge {} -> {}: its translation of {length:e} m makes entries of the pose graph matrix too large for the eigenvalue bounds in double precision (their squares overflow); rescale the translations",
+            graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
+    let finite = |m: &Mat<c64>| {
+        (0..m.ncols())
+            .all(|c| (0..m.nrows()).all(|r| m[(r, c)].re.is_finite() && m[(r, c)].im.is_finite()))
+    };
+    if !finite(&dense) {
+        return Err(Error::Invalid(
+            "the pose graph matrix overflows a 64-bit float: the weighted squared translations of the edges at one pose add up to more than 1.8e308".into(),
+        ));
+    }
+    let m = matrix
+        .rotation_matrix()
+        .ok_or_else(|| singular_laplacian(graph, original))?;
+    if !finite(&m) {
+        return Err(Error::Invalid(
+            "the rotation matrix M = Q - S* L^-1 S of this graph overflows a 64-bit float: its translations are too long for its weights".into(),
+        ));
+    }
+    Ok((matrix, m))
+}
+
+/// Why the anchored Laplacian L of `graph` could not be factored: the graph is disconnected, or
+/// (connected, so L ≻ 0 in exact arithmetic) its translation weights span a range that double
+/// precision cannot resolve, e.g. 1e-9 next to 1e9: light edges then vanish in the rounding of
+/// the heavy ones.
+pub fn singular_laplacian(graph: &PoseGraph, weights: &[EdgeWeight]) -> Error {
+    if graph.connected_components().1 != 1 {
+        return Error::Invalid("the graph is not connected".into());
+    }
+    let (lo, hi) = weights.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+        (lo.min(w.tau), hi.max(w.tau))
+    });
+    Error::Invalid(format!(
+        "the weighted Laplacian of this connected graph is numerically singular: its translation weights range from {lo:e} to {hi:e}, too wide for double precision (edges that light are lost in the rounding of the heavy ones); rescale the information matrices or use --weights unit"
+    ))
 }
 
 /// Poses from (unnormalized) rotation entries: each rotation normalized to unit modulus, the
@@ -174,20 +337,37 @@ pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose
 
 /// The estimate moved rigidly (f is invariant to that) so that pose 0 is exactly `anchor`.
 pub fn move_to_anchor(poses: &[Pose2], anchor: Pose2) -> Vec<Pose2> {
-    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 to the anchor's.
-    let phi = anchor.theta - poses[0].theta;
+    // Rotate by φ so that θ_0 becomes the anchor's, then translate p_0 to the anchor's. φ is
+    // taken from the anchor's angle reduced to [-π, π] (if outside, by the rotation e^{iθ}, whose
+    // argument reduction is exact): an anchor angle of 1e30 added to every θ would erase the
+    // differences between them.
+    let anchor_angle = if anchor.theta.abs() <= std::f64::consts::PI {
+        anchor.theta
+    } else {
+        rotation(anchor.theta).arg()
+    };
+    let phi = anchor_angle - poses[0].theta;
     let turn = rotation(phi);
     let p0 = c64::new(poses[0].x, poses[0].y);
-    let mut moved: Vec<Pose2> = poses
-        .iter()
-        .map(|p| {
-            let q = turn * (c64::new(p.x, p.y) - p0);
-            Pose2::new(anchor.x + q.re, anchor.y + q.im, p.theta + phi)
-        })
-        .collect();
-    // Exactly, not up to the rounding of θ_0 + φ.
-    moved[0] = anchor;
-    moved
+    let place = |at: Pose2| -> Vec<Pose2> {
+        let mut moved: Vec<Pose2> = poses
+            .iter()
+            .map(|p| {
+                let q = turn * (c64::new(p.x, p.y) - p0);
+                Pose2::new(at.x + q.re, at.y + q.im, p.theta + phi)
+            })
+            .collect();
+        // Exactly, not up to the rounding of θ_0 + φ.
+        moved[0] = at;
+        moved
+    };
+    let moved = place(anchor);
+    if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+        return moved;
+    }
+    // Positions that overflow next to the anchor's (near 1.8e308): pose 0 at the origin instead
+    // (f does not depend on where the estimate is).
+    place(Pose2::new(0.0, 0.0, anchor.theta))
 }
 
 /// The comparison roundings of Sec. 5.2 and Sec. 6 from a solved component: the eigenvector

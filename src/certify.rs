@@ -235,7 +235,10 @@ impl SparseCertifier {
         let mut eta = 1.25 * self.resolution(lambda, x, p);
         let sum: f64 = lambda.iter().sum();
         let sum_error = 2.0 * n as f64 * f64::EPSILON * lambda.iter().map(|l| l.abs()).sum::<f64>();
-        while eta <= eta_max {
+        // At most 80 doublings (a factor 1e24 above the resolution): beyond, no useful bound.
+        let mut attempts = 0;
+        while eta <= eta_max && eta.is_finite() && attempts < 80 {
+            attempts += 1;
             if let Some(alpha) = self.try_eta(lambda, eta, alpha0) {
                 return Some(SparseBound {
                     eta,

@@ -28,6 +28,8 @@ pub enum ParseErrorKind {
         found: usize,
         layout: &'static str,
     },
+    #[error("FIX takes one or more vertex ids, found none")]
+    NoFixIds,
     #[error("expected a number, found '{token}'{hint}")]
     NotANumber { token: String, hint: &'static str },
     #[error("'{token}' is out of the range of a 64-bit float ({what})")]

@@ -91,6 +91,17 @@ impl Problem {
                 }
             }
         }
+        // Every diagonal entry is in the pattern, zero or not (a pose without edges has none in
+        // W̃), so that penalized and shifted matrices can be built on it.
+        let mut has_diagonal = vec![false; matrix.dim()];
+        for &(r, c, _) in &upper {
+            if r == c {
+                has_diagonal[r] = true;
+            }
+        }
+        for (k, _) in has_diagonal.iter().enumerate().filter(|(_, h)| !**h) {
+            upper.push((k, k, c64::new(0.0, 0.0)));
+        }
         let n = graph.num_poses();
         let pose_rank = crate::factor::pose_rank(n, graph.edges.iter().map(|e| (e.i, e.j)));
         Problem {

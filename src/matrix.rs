@@ -226,7 +226,8 @@ pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
             let rot = rotation(b.theta) - ri * rotation(e.measurement.theta);
             w.tau * t.norm_sqr() + w.kappa * rot.norm_sqr()
         })
-        .sum()
+        // From +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
+        .fold(0.0, |a, b| a + b)
 }
 
 #[cfg(test)]

@@ -494,7 +494,7 @@ fn finish(
     options: &StaircaseOptions,
 ) -> StaircaseSolution {
     let lambda = bound_lambda.unwrap_or(&local.lambda);
-    let threshold = 16.0 * certifier.eigenvalue_resolution(lambda);
+    let threshold = (16.0 * certifier.eigenvalue_resolution(lambda)).max(f64::MIN_POSITIVE);
     let near_zero = certifier.count_below(lambda, threshold);
     let lower_bound = bound.map_or(0.0, |b| b.lower_bound.max(0.0));
     let certified =

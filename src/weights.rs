@@ -60,12 +60,20 @@ pub fn edge_weights(graph: &PoseGraph, policy: Weights) -> Result<Vec<EdgeWeight
                     .information(e)
                     .ok_or_else(|| bad("its covariance is singular"))?;
                 let [a, b, _, d, _, f] = info.0;
-                // tr(Ω_tt⁻¹) = (a + d) / det(Ω_tt) for Ω_tt = [[a, b], [b, d]].
-                let det = a * d - b * b;
-                let tau = 2.0 * det / (a + d);
+                // tr(Ω_tt⁻¹) = (a + d) / det(Ω_tt) for Ω_tt = [[a, b], [b, d]], computed on
+                // Ω_tt / s, s = max(a, d), so that det does not overflow (or underflow) for
+                // entries near 1e±200 whose τ is representable.
+                let s = a.abs().max(d.abs());
+                let (a, b, d) = (a / s, b / s, d / s);
+                let tau = 2.0 * s * ((a * d - b * b) / (a + d));
                 let kappa = 2.0 * f;
-                if !(tau.is_finite() && tau > 0.0 && kappa.is_finite() && kappa > 0.0) {
+                if !(tau > 0.0 && kappa > 0.0) {
                     return Err(bad("its information matrix is not positive definite"));
+                }
+                if !(tau.is_finite() && kappa.is_finite()) {
+                    return Err(bad(
+                        "its information values are so large that the weights overflow a 64-bit float",
+                    ));
                 }
                 Ok(EdgeWeight { tau, kappa })
             }
@@ -127,6 +135,28 @@ mod tests {
                 kappa: 1.0
             }
         );
+    }
+
+    #[test]
+    fn isotropic_weights_of_extreme_magnitudes() {
+        // Ω_tt = ω I gives τ = ω, also where det(Ω_tt) = ω² overflows or underflows.
+        for omega in [1e200, 1e-200, 1e-9, 1e9] {
+            let g = graph(
+                SymMat3([omega, 0.0, 0.0, omega, 0.0, 1.0]),
+                NoiseKind::Information,
+            );
+            let w = edge_weights(&g, Weights::Isotropic).unwrap()[0];
+            assert!((w.tau - omega).abs() <= 1e-15 * omega, "{omega}: {w:?}");
+        }
+        // κ = 2 Ω_θθ overflows: said so, not called indefinite.
+        let g = graph(
+            SymMat3([1.0, 0.0, 0.0, 1.0, 0.0, 1e308]),
+            NoiseKind::Information,
+        );
+        let e = edge_weights(&g, Weights::Isotropic)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("overflow") && e.contains("edge 0 -> 1"), "{e}");
     }
 
     #[test]

@@ -1,207 +1,20 @@
-//! `pgo-convert` as a user runs it: every validation error with its PATH:LINE:COL and exit
-//! status 2, warnings, the layout the reader tolerates, stdin/stdout, atomic output.
+//! `pgo-convert` as a user runs it: warnings, the layout the reader tolerates, stdin/stdout,
+//! atomic output.
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-
-fn pgo_convert() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pgo-convert"))
-}
+use common::{Dir, s, text};
+use std::process::Output;
 
 fn run(args: &[&str], stdin: Option<&[u8]>) -> Output {
-    let mut cmd = pgo_convert();
-    cmd.args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    let mut child = cmd.spawn().unwrap();
-    {
-        use std::io::Write;
-        let mut input = child.stdin.take().unwrap();
-        if let Some(bytes) = stdin {
-            input.write_all(bytes).unwrap();
-        }
-    }
-    child.wait_with_output().unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-struct Dir(tempfile::TempDir);
-
-impl Dir {
-    fn new() -> Self {
-        Dir(tempfile::tempdir().unwrap())
-    }
-    fn file(&self, name: &str, content: &[u8]) -> PathBuf {
-        let p = self.0.path().join(name);
-        std::fs::write(&p, content).unwrap();
-        p
-    }
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.path().join(name)
-    }
-    fn entries(&self) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(self.0.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    common::run_with_stdin("pgo-convert", args, stdin)
 }
 
 const V: &str = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\n";
 const INFO: &str = "1 0 0 1 0 1";
 
-/// Each malformed input gives `PATH:LINE:COL: error: ...` with the message, exit status 2, and
-/// leaves an existing output file untouched and no temporary file behind.
-#[test]
-fn every_validation_error_has_its_location_and_status_2() {
-    let cases: Vec<(String, &str, &str)> = vec![
-        (
-            format!("{V}EDGE_SE2 0 1 1 0 0 1 0 0 1 0\n"),
-            "3:29",
-            "EDGE_SE2 takes 11 fields",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1 0 0 {INFO} 7\n"),
-            "3:32",
-            "found 12",
-        ),
-        (
-            "VERTEX_SE2 0 1 2\n".into(),
-            "1:17",
-            "VERTEX_SE2 takes 4 fields",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 nan 0 0 {INFO}\n"),
-            "3:14",
-            "non-finite",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1 inf 0 {INFO}\n"),
-            "3:16",
-            "non-finite",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1e400 0 0 {INFO}\n"),
-            "3:14",
-            "overflows",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 0,5 0 0 {INFO}\n"),
-            "3:14",
-            "decimal comma",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 0x10 0 0 {INFO}\n"),
-            "3:14",
-            "hexadecimal",
-        ),
-        ("VERTEX_SE2 -1 0 0 0\n".into(), "1:12", "cannot be negative"),
-        ("VERTEX_SE2 1.5 0 0 0\n".into(), "1:12", "ids are integers"),
-        (
-            "VERTEX_SE2 2147483648 0 0 0\n".into(),
-            "1:12",
-            "at most 2^31 - 1",
-        ),
-        (
-            format!("{V}VERTEX_SE2 0 5 5 5\n"),
-            "3:12",
-            "vertex 0 is declared twice (first at line 1)",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 7 1 0 0 {INFO}\n"),
-            "3:12",
-            "vertex 7, which no vertex line declares",
-        ),
-        (
-            format!("{V}EDGE_SE2 1 1 1 0 0 {INFO}\n"),
-            "3:12",
-            "self-loop",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1 0 0 1 -2 0 -1 0 1\n"),
-            "3:20",
-            "not positive definite",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1 0 0 1 0 0 1 0 0\n"),
-            "3:20",
-            "not positive definite",
-        ),
-        (format!("{V}FIX 9\n"), "3:5", "FIX names vertex 9"),
-        (
-            "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n".into(),
-            "1:1",
-            "3D pose graphs are not supported",
-        ),
-        (
-            "EDGE3 0 1 0 0 0 0 0 0\n".into(),
-            "1:1",
-            "3D pose graphs are not supported",
-        ),
-        (
-            format!("{V}VERTEX_XY 5 1 2\n"),
-            "3:1",
-            "landmarks are not supported",
-        ),
-        (
-            format!("{V}LANDMARK 0 5 1 2 1 0 1\n"),
-            "3:1",
-            "landmarks are not supported",
-        ),
-        (
-            format!("{V}EDGE_PRIOR_SE2 0 0 0 0 {INFO}\n"),
-            "3:1",
-            "unary priors are not supported",
-        ),
-        (
-            format!("{V}EDGE_SE2 0 1 1 0 0 {INFO}\nEDGE2 0 1 1 0 0 {INFO}\n"),
-            "4:1",
-            "edge tags of both formats",
-        ),
-        (
-            "\u{feff}VERTEX_SE2 0 0 0 x\n".to_string(),
-            "1:18",
-            "expected a number, found 'x'",
-        ),
-    ];
-    for (content, at, needle) in cases {
-        let dir = Dir::new();
-        let input = dir.file("in.g2o", content.as_bytes());
-        let output = dir.file("out.g2o", b"precious\n");
-        let out = run(&[s(&input), "-o", s(&output)], None);
-        let err = text(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{content:?}: {err}");
-        let prefix = format!("{}:{at}: error: ", s(&input));
-        assert!(
-            err.starts_with(&prefix),
-            "{content:?}\nwant {prefix}\ngot  {err}"
-        );
-        assert!(
-            err.contains(needle),
-            "{content:?}: want {needle:?} in {err}"
-        );
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert_eq!(
-            std::fs::read(&output).unwrap(),
-            b"precious\n",
-            "{content:?}"
-        );
-        assert_eq!(dir.entries(), ["in.g2o", "out.g2o"], "{content:?}");
-        assert!(out.stdout.is_empty());
-    }
-}
+// Every validation error (and its location, status 2, untouched output) is checked for every
+// tool by tests/corpus.rs on the files of tests/malformed/.
 
 #[test]
 fn indefinite_information_is_accepted_on_request() {
@@ -413,9 +226,10 @@ fn output_file_is_complete_and_readable() {
 
 #[cfg(unix)]
 #[test]
-fn writing_to_a_device_writes_through_it() {
-    // `-o /dev/null` must not rename a temporary file over the device (that would replace
-    // /dev/null with a regular file for the whole machine); devices and FIFOs are written in place.
+fn writing_to_a_fifo_writes_through_it() {
+    // `-o /dev/null` (or a named pipe) must not rename a temporary file over the special file:
+    // that replaced /dev/null with a regular file for the whole machine. Devices and FIFOs are
+    // written in place. Checked on a FIFO of the test's own, read by a thread.
     use std::os::unix::fs::FileTypeExt;
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("g.g2o");
@@ -424,22 +238,35 @@ fn writing_to_a_device_writes_through_it() {
         "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n",
     )
     .unwrap();
-    let out = run(&[s(&input), "-o", "/dev/null"], None);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let meta = std::fs::metadata("/dev/null").unwrap();
-    assert!(
-        meta.file_type().is_char_device(),
-        "/dev/null is no longer a device"
-    );
-    for solve_args in [["--method", "staircase"], ["--method", "sdp"]] {
-        let out = Command::new(env!("CARGO_BIN_EXE_pgo-solve"))
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo unavailable: skipped");
+        return;
+    }
+    let tools: [(&str, Vec<&str>); 3] = [
+        ("pgo-convert", vec![]),
+        ("pgo-solve", vec!["--method", "staircase", "--json"]),
+        ("pgo-solve", vec!["--method", "sdp", "--json"]),
+    ];
+    for (tool, extra) in tools {
+        let path = fifo.clone();
+        let reader = std::thread::spawn(move || std::fs::read(path).unwrap());
+        let out = std::process::Command::new(common::bin(tool))
             .arg(&input)
-            .args(solve_args)
-            .args(["--json", "-o", "/dev/null"])
+            .args(&extra)
+            .arg("-o")
+            .arg(&fifo)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", text(&out.stderr));
-        let meta = std::fs::metadata("/dev/null").unwrap();
-        assert!(meta.file_type().is_char_device());
+        assert!(out.status.success(), "{tool}: {}", text(&out.stderr));
+        let written = reader.join().unwrap();
+        assert!(
+            text(&written).starts_with("VERTEX_SE2 0 "),
+            "{tool}: {}",
+            text(&written)
+        );
+        let meta = std::fs::symlink_metadata(&fifo).unwrap();
+        assert!(meta.file_type().is_fifo(), "{tool} replaced the FIFO");
     }
 }

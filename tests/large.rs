@@ -7,49 +7,11 @@ mod common;
 use common::{bits, naive_read};
 use pgo::io::{self, ReadOptions};
 
-/// A deterministic g2o text of about `mb` megabytes: a chain of vertices and edges with varied
-/// number syntax, plus loop closures.
+/// A deterministic g2o text of about `mb` megabytes (see [`common::write_generated`]).
 fn generated(mb: usize) -> String {
-    let mut s = String::new();
-    let mut x = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        x
-    };
-    let n = mb * 11_500;
-    for k in 0..n {
-        let r = next();
-        s += &format!(
-            "VERTEX_SE2 {k} {}.{} -{}e-3 {}\n",
-            r % 1000,
-            r % 97,
-            r % 5000,
-            (r % 6283) as f64 / 1000.0
-        );
-    }
-    for k in 0..n {
-        let r = next();
-        let j = if k + 1 < n && r % 5 != 0 {
-            k + 1
-        } else {
-            (r as usize) % n
-        };
-        if j == k {
-            continue;
-        }
-        s += &format!(
-            "EDGE_SE2 {k} {j} 1.{} 0.00{} -{}.5 {} 0 0 {} 0 {}\n",
-            r % 1000,
-            r % 89,
-            r % 3,
-            1 + r % 400,
-            1 + r % 300,
-            1 + r % 700
-        );
-    }
-    s
+    let mut out = Vec::new();
+    common::write_generated(mb, &mut out).unwrap();
+    String::from_utf8(out).unwrap()
 }
 
 fn read(text: &str) -> Result<(pgo::PoseGraph, io::ReadReport), pgo::Error> {

@@ -114,9 +114,16 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut components = Vec::new();
     for (part, members, _) in graph.components() {
         let weights = edge_weights(&part, policy)?;
+        crate::algorithm1::check_edge_terms(&part, &weights, &weights)?;
         let estimate: Vec<Pose2> = members.iter().map(|&k| poses[k]).collect();
         let n = part.num_poses();
         let cost = crate::matrix::cost(&part, &weights, &estimate);
+        if !cost.is_finite() {
+            return Err(Error::Invalid(format!(
+                "{}: the cost of the estimate overflows a 64-bit float (its poses are too far apart for the weights)",
+                args.estimate.as_deref().unwrap_or(&args.input.input)
+            )));
+        }
         let reach = args.tol * cost.max(1.0) / n as f64;
         let mut own = certify_estimate(&part, &weights, &estimate, reach);
         let own_bound = own.bound.map(|b| b.lower_bound.max(0.0));
@@ -138,7 +145,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             }
         };
         let near_zero = own.bound.and_then(|_| {
-            let threshold = 16.0 * own.certifier.eigenvalue_resolution(&own.lambda);
+            let threshold =
+                (16.0 * own.certifier.eigenvalue_resolution(&own.lambda)).max(f64::MIN_POSITIVE);
             own.certifier.count_below(&own.lambda, threshold)
         });
         let suboptimality_bound = cost - lower_bound;

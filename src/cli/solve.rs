@@ -109,6 +109,10 @@ pub struct ComponentReport {
     pub penalized_eigenvalues: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sdp_iterations: Option<usize>,
+    /// Whether the SDP solver reached its tolerance (if not, the bound is proven all the same,
+    /// from the dual feasible multipliers it reached, and only weaker).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sdp_converged: Option<bool>,
     /// The largest rank the staircase reached (1: no staircase needed).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rank: Option<usize>,
@@ -159,6 +163,8 @@ pub struct Report {
     pub certified: bool,
     pub szep: bool,
     pub near_zero_eigenvalues: usize,
+    /// Whether the SDP solver reached its tolerance on every component.
+    pub sdp_converged: bool,
     pub components: Vec<ComponentReport>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
@@ -196,6 +202,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             components.push(component_report(&part, &solution, args.tol));
             solutions.push((solution.poses, members));
         } else {
+            crate::algorithm1::check_edge_terms(&part, &weights, &weights)?;
             let options = StaircaseOptions {
                 tolerance: args.tol,
                 ..Default::default()
@@ -243,8 +250,9 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     let write_s = t2.elapsed().as_secs_f64();
 
-    let cost: f64 = components.iter().map(|c| c.cost).sum();
-    let lower_bound: f64 = components.iter().map(|c| c.lower_bound).sum();
+    // Folded from +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
+    let cost = components.iter().fold(0.0, |a, c| a + c.cost);
+    let lower_bound = components.iter().fold(0.0, |a, c| a + c.lower_bound);
     let suboptimality_bound = cost - lower_bound;
     let report = Report {
         method: args.method,
@@ -262,6 +270,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         certified: components.iter().all(|c| c.certified),
         szep: components.iter().all(|c| c.szep),
         near_zero_eigenvalues: components.iter().map(|c| c.near_zero_eigenvalues).sum(),
+        sdp_converged: components.iter().all(|c| c.sdp_converged != Some(false)),
         components,
         timings: (!args.no_timings).then_some(Timings {
             read_s,
@@ -297,6 +306,7 @@ fn component_report(
         rounding: Some(s.rounding),
         penalized_eigenvalues: Some(s.eigenvalues.iter().take(4).copied().collect()),
         sdp_iterations: Some(s.dual.iterations),
+        sdp_converged: Some(s.dual.converged),
         rank: None,
         iterations: None,
         eta: None,
@@ -323,6 +333,7 @@ fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tol: f64) -> Compon
         rounding: None,
         penalized_eigenvalues: None,
         sdp_iterations: None,
+        sdp_converged: None,
         rank: Some(s.rank),
         iterations: Some(s.iterations),
         eta: s.bound.map(|b| b.eta),
@@ -374,6 +385,13 @@ fn text_report(input: &str, r: &Report) -> String {
             )
         },
     );
+    if !r.sdp_converged {
+        out += &row(
+            "SDP",
+            "did not converge: the bound is that of the dual feasible multipliers reached"
+                .to_string(),
+        );
+    }
     for (k, c) in r.components.iter().enumerate() {
         if r.components.len() > 1 {
             out += &row(

@@ -2,11 +2,8 @@
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
 use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
-use crate::algorithm1::{SdpSolver, solve_dual};
-use crate::certify::dual_bound;
-use crate::error::Error;
-use crate::matrix::PoseGraphMatrix;
-use crate::spectrum::{hermitian_eigenvalues, near_zero, zero_threshold};
+use crate::algorithm1::{SdpSolver, analyze};
+use crate::spectrum::hermitian_eigenvalues;
 use crate::weights::{Weights, edge_weights};
 use clap::Parser;
 use serde::Serialize;
@@ -67,6 +64,8 @@ pub struct ComponentSpectrum {
     pub lambda: Vec<f64>,
     /// The proven lower bound on f* (see pgo-solve).
     pub lower_bound: f64,
+    /// Whether the SDP solver reached its tolerance (see pgo-solve).
+    pub sdp_converged: bool,
 }
 
 /// What `--json` prints; lists are ascending.
@@ -86,6 +85,8 @@ pub struct Report {
     pub szep: bool,
     pub tree: bool,
     pub balanced: bool,
+    /// Whether the SDP solver reached its tolerance on every component.
+    pub sdp_converged: bool,
     pub components: Vec<ComponentSpectrum>,
 }
 
@@ -113,31 +114,25 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut components = Vec::new();
     for (part, _, _) in graph.components() {
         let weights = edge_weights(&part, policy)?;
-        let matrix = PoseGraphMatrix::new(&part, &weights);
-        let m = matrix
-            .rotation_matrix()
-            .ok_or_else(|| Error::Invalid("a component is not connected".into()))?;
-        let dual = solve_dual(&m, args.solver).map_err(|e| Error::Invalid(e.to_string()))?;
-        let bound = dual_bound(&matrix, &dual.lambda)
-            .ok_or_else(|| Error::Invalid("a component is not connected".into()))?;
-        let zeros = near_zero(
-            &bound.eigenvalues,
-            zero_threshold(&matrix, dual.primal_objective - dual.dual_objective),
-        );
+        // In the units of the normalized weights, scaled back (see DualAnalysis).
+        let a = analyze(&part, &weights, args.solver)?;
+        let scaled = |v: Vec<f64>| -> Vec<f64> { v.into_iter().map(|x| x * a.scale).collect() };
+        let zeros = a.near_zero;
         components.push(ComponentSpectrum {
             first_id: part.ids[0],
             poses: part.num_poses(),
             edges: part.edges.len(),
-            eigenvalues: smallest(hermitian_eigenvalues(&matrix.dense()), args.count),
-            penalized_eigenvalues: smallest(bound.eigenvalues.clone(), args.count),
-            rotation_eigenvalues: smallest(hermitian_eigenvalues(&m), args.count),
+            eigenvalues: smallest(scaled(hermitian_eigenvalues(&a.matrix.dense())), args.count),
+            penalized_eigenvalues: smallest(scaled(a.bound.eigenvalues.clone()), args.count),
+            rotation_eigenvalues: smallest(scaled(hermitian_eigenvalues(&a.m)), args.count),
             near_zero: zeros,
             szep: zeros <= 1,
             tree: part.is_forest(),
             balanced: part.is_balanced(BALANCE_TOLERANCE),
-            dual_objective: dual.dual_objective,
-            lambda: dual.lambda.clone(),
-            lower_bound: bound.lower_bound,
+            dual_objective: a.dual.dual_objective * a.scale,
+            lambda: scaled(a.dual.lambda.clone()),
+            lower_bound: a.bound.lower_bound * a.scale,
+            sdp_converged: a.dual.converged,
         });
     }
     let merge = |f: fn(&ComponentSpectrum) -> &Vec<f64>| {
@@ -160,6 +155,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         szep: components.iter().all(|c| c.szep),
         tree: components.iter().all(|c| c.tree),
         balanced: components.iter().all(|c| c.balanced),
+        sdp_converged: components.iter().all(|c| c.sdp_converged),
         components,
     };
     let text = if args.json {

@@ -53,11 +53,13 @@ fn classify(tag: &[u8]) -> Tag {
     }
 }
 
+/// A vertex line as read (32 bytes: positions are 32-bit like [`EdgeSite`]'s, as the table
+/// of raw vertices is the largest the reader holds besides the graph).
 pub(super) struct RawVertex {
     pub(super) id: VertexId,
+    pub(super) line: u32,
+    pub(super) col: u32,
     pub(super) pose: Pose2,
-    pub(super) line: usize,
-    pub(super) col: usize,
 }
 
 /// Where an edge line's fields are, for messages after the whole file is read (32-bit to keep
@@ -262,7 +264,7 @@ impl BlockParser<'_> {
             Tag::Comment => Ok(()),
             Tag::Vertex(family) => self.vertex(line_no, line, fields, family),
             Tag::Edge(family) => self.edge(line_no, line, fields, family),
-            Tag::Fix => self.fix(line_no, line, fields),
+            Tag::Fix => self.fix(line_no, fields),
             Tag::Equiv => {
                 if self.options.strict {
                     return Err(at_tag(ParseErrorKind::Equiv));
@@ -397,8 +399,8 @@ impl BlockParser<'_> {
         self.block.vertices.push(RawVertex {
             id,
             pose: Pose2::new(v[0], v[1], v[2]),
-            line,
-            col,
+            line: narrow(line),
+            col: narrow(col),
         });
     }
 
@@ -449,22 +451,15 @@ impl BlockParser<'_> {
         Ok(())
     }
 
-    fn fix(&mut self, line_no: usize, line: &[u8], fields: &[Field]) -> Result<(), ParseError> {
+    fn fix(&mut self, line_no: usize, fields: &[Field]) -> Result<(), ParseError> {
         let args: Vec<&Field> = fields[1..]
             .iter()
             .take_while(|f| f.text.first() != Some(&b'#'))
             .collect();
         if args.is_empty() {
-            return Err(self.error(
-                line_no,
-                line.len() + 1,
-                ParseErrorKind::FieldCount {
-                    tag: "FIX".into(),
-                    expected: 1,
-                    found: 0,
-                    layout: "one or more vertex ids",
-                },
-            ));
+            // Just past the tag: a trailing comment is not where the ids were expected.
+            let col = fields[0].col + fields[0].text.len();
+            return Err(self.error(line_no, col, ParseErrorKind::NoFixIds));
         }
         for f in args {
             let id = self.id(line_no, f)?;

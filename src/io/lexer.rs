@@ -26,10 +26,28 @@ pub struct Field<'a> {
 }
 
 impl Field<'_> {
+    /// The field as shown in messages: invalid UTF-8 as U+FFFD, control characters escaped
+    /// (`\u{0}`, `\u{1b}`: a message never moves the terminal's cursor or rings its bell), and
+    /// at most [`SHOWN_CHARS`] characters (a long token ends in `...`).
     pub fn lossy(&self) -> String {
-        String::from_utf8_lossy(self.text).into_owned()
+        let mut out = String::new();
+        for (k, c) in String::from_utf8_lossy(self.text).chars().enumerate() {
+            if k == SHOWN_CHARS {
+                out.push_str("...");
+                break;
+            }
+            if c.is_control() {
+                out.extend(c.escape_default());
+            } else {
+                out.push(c);
+            }
+        }
+        out
     }
 }
+
+/// Longest token shown in full in a message.
+pub const SHOWN_CHARS: usize = 64;
 
 /// C++ `isspace` in the "C" locale: what `>>` skips between fields.
 fn is_space(c: u8) -> bool {

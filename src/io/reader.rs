@@ -458,27 +458,29 @@ impl<'o> Reader<'o> {
             let poses = vec![Pose2::IDENTITY; ids.len()];
             return Ok((ids, poses));
         }
-        let mut order: Vec<usize> = (0..self.acc.vertices.len()).collect();
-        order.sort_by_key(|&k| (self.acc.vertices[k].id, self.acc.vertices[k].line));
+        // The vertices are in file order: a stable sort by id keeps the lines of one id in it.
+        let v = &self.acc.vertices;
+        let mut order: Vec<u32> = (0..v.len() as u32).collect();
+        order.sort_by_key(|&k| v[k as usize].id);
         // The duplicate declared earliest in the file is reported.
         let duplicate = order
             .windows(2)
-            .filter(|w| self.acc.vertices[w[0]].id == self.acc.vertices[w[1]].id)
-            .min_by_key(|w| self.acc.vertices[w[1]].line);
+            .filter(|w| v[w[0] as usize].id == v[w[1] as usize].id)
+            .min_by_key(|w| w[1]);
         if let Some(w) = duplicate {
-            let (first, second) = (&self.acc.vertices[w[0]], &self.acc.vertices[w[1]]);
+            let (first, second) = (&v[w[0] as usize], &v[w[1] as usize]);
             return Err(self.error(
-                second.line,
-                second.col,
+                second.line as usize,
+                second.col as usize,
                 ParseErrorKind::DuplicateVertex {
                     id: second.id,
-                    first_line: first.line,
+                    first_line: first.line as usize,
                 },
             ));
         }
         Ok(order
             .iter()
-            .map(|&k| (self.acc.vertices[k].id, self.acc.vertices[k].pose))
+            .map(|&k| (v[k as usize].id, v[k as usize].pose))
             .unzip())
     }
 }

@@ -180,6 +180,7 @@ pub fn solve(m: MatRef<'_, c64>) -> Result<DualSolution, SdpError> {
             primal_objective: 0.0,
             iterations: 0,
             solver: "clarabel",
+            converged: true,
         });
     }
     let herm = |i: usize, j: usize| (m[(i, j)] + m[(j, i)].conj()) * 0.5;
@@ -274,6 +275,7 @@ pub fn solve(m: MatRef<'_, c64>) -> Result<DualSolution, SdpError> {
         primal_objective,
         iterations: solution.iterations as usize,
         solver: "clarabel",
+        converged: true,
     })
 }
 

@@ -183,7 +183,30 @@ pub fn solve_with_parallelism(
     let ms = Mat::from_fn(n, n, |i, j| (m[(i, j)] + m[(j, i)].conj()) * (0.5 / scale));
     let mut ipm = Ipm::new(ms, par);
     let iterations = ipm.run(options, scale)?;
-    Ok(ipm.into_solution(m, scale, iterations))
+    Ok(ipm.into_solution(m, scale, iterations, true))
+}
+
+/// [`solve`], except that when the gap is not reached ([`SdpError::NotConverged`]) the last
+/// iterate is returned, with `converged: false`: its y keeps Z = M − Diag(y) ≻ 0 at every step,
+/// so it is dual feasible and still proves a lower bound (checked again, rounding included, by
+/// [`crate::certify::dual_bound`]); only the gap to the optimum is larger. Badly scaled graphs
+/// (translations of 1e6 m against unit rotations) can stall above every tolerance.
+pub fn solve_best_effort(
+    m: MatRef<'_, c64>,
+    options: &IpmOptions,
+) -> Result<DualSolution, SdpError> {
+    let n = m.nrows();
+    let scale = validate(m)?;
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let ms = Mat::from_fn(n, n, |i, j| (m[(i, j)] + m[(j, i)].conj()) * (0.5 / scale));
+    let mut ipm = Ipm::new(ms, Par::Seq);
+    match ipm.run(options, scale) {
+        Ok(iterations) => Ok(ipm.into_solution(m, scale, iterations, true)),
+        Err(SdpError::NotConverged { iterations, .. }) => {
+            Ok(ipm.into_solution(m, scale, iterations, false))
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Checks that `m` is square, finite and Hermitian within rounding; returns max |M_ij|.
@@ -702,7 +725,13 @@ impl Ipm {
 
     /// The best pair found: λ* = scale · y, X* with a unit diagonal, objectives on the original
     /// matrix.
-    fn into_solution(self, m: MatRef<'_, c64>, scale: f64, iterations: usize) -> DualSolution {
+    fn into_solution(
+        self,
+        m: MatRef<'_, c64>,
+        scale: f64,
+        iterations: usize,
+        converged: bool,
+    ) -> DualSolution {
         let n = self.n;
         let plain_primal = unit_diagonal_objective(self.m.as_ref(), self.x.as_ref());
         let mut x = match self.polished_x {
@@ -729,6 +758,7 @@ impl Ipm {
             x,
             iterations,
             solver: "ipm",
+            converged,
         }
     }
 }

@@ -33,6 +33,10 @@ pub struct DualSolution {
     pub iterations: usize,
     /// Which solver produced it ("ipm", "clarabel").
     pub solver: &'static str,
+    /// Whether the solver reached its tolerance. A solution that did not (see
+    /// [`ipm::solve_best_effort`]) is still dual feasible, so it still proves a bound, only a
+    /// weaker one.
+    pub converged: bool,
 }
 
 /// Why an SDP solve failed.
