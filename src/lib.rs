@@ -17,7 +17,8 @@
 //! - [`io`]: lossless g2o and TORO readers and writers, dialects, precise `PATH:LINE:COL` errors;
 //! - [`graph`]: the data model, kept exactly as read, with a dense index for the numerics;
 //! - [`stats`]: what `pgo-convert --stats` reports;
-//! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them).
+//! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them);
+//! - [`progress`]: solvers report their iterations to whoever watches.
 
 pub mod algorithm1;
 pub mod certify;
@@ -28,6 +29,7 @@ pub mod graph;
 pub mod io;
 pub mod matrix;
 pub mod nullspace;
+pub mod progress;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
