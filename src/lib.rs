@@ -18,7 +18,8 @@
 //! - [`graph`]: the data model, kept exactly as read, with a dense index for the numerics;
 //! - [`stats`]: what `pgo-convert --stats` reports;
 //! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them);
-//! - [`progress`]: solvers report their iterations to whoever watches.
+//! - [`viz`]: what the tools' `--rerun-*` flags record for the rerun viewer (cargo feature
+//!   `rerun`, on by default), with solvers' iterations reported through [`progress`].
 
 pub mod algorithm1;
 pub mod certify;
@@ -34,6 +35,7 @@ pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
 pub mod stats;
+pub mod viz;
 pub mod weights;
 
 pub use error::{Error, Result};

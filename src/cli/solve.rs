@@ -1,6 +1,8 @@
 //! `pgo-solve`: the globally optimal estimate of a pose graph and the bound that proves it.
 
-use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
+use super::common::{
+    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
+};
 use crate::algorithm1::{ComponentSolution, Rounding, SdpSolver, solve_connected};
 use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
@@ -61,6 +63,9 @@ pub struct Args {
     /// Leave the timings out of the report (for byte-identical output)
     #[arg(long)]
     pub no_timings: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -130,9 +135,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if !(args.tol >= 0.0 && args.tol.is_finite()) {
         return Err(Error::Invalid("--tol must be a finite number >= 0".into()));
     }
+    let rec = args.rerun.recorder("pgo-solve")?;
     let t0 = Instant::now();
     let (mut graph, read_report) = args.input.read()?;
     let read_s = t0.elapsed().as_secs_f64();
+    rec.graph(&graph);
     check_dense_size(&graph, "pgo-solve")?;
     let policy = args.weights.weights;
     let t1 = Instant::now();
@@ -140,7 +147,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut solutions: Vec<(ComponentSolution, Vec<usize>)> = Vec::new();
     for (part, members, _) in graph.components() {
         let weights = edge_weights(&part, policy)?;
-        let solution = solve_connected(&part, &weights, args.solver)?;
+        let solution = rec.observe(|| solve_connected(&part, &weights, args.solver))?;
         components.push(component_report(&part, &solution, args.tol));
         solutions.push((solution, members));
     }
@@ -151,6 +158,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
     }
     graph.vertices_declared = true;
+    rec.optimized(&graph, policy);
 
     let t2 = Instant::now();
     let output = match (&args.output, args.json) {
@@ -200,6 +208,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     } else {
         eprint!("{}", text_report(&args.input.input, &report));
     }
+    rec.certificate(&crate::viz::Certificate {
+        cost: report.cost,
+        lower_bound: report.lower_bound,
+        certified: report.certified,
+        szep: report.szep,
+        near_zero: report.near_zero_eigenvalues,
+    });
+    rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }
 
