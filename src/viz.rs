@@ -698,17 +698,14 @@ mod backend {
             });
             let mut viewers: Vec<(String, ProxyUri)> = Vec::new();
             if target.spawn {
-                match rerun::spawn(&rerun::SpawnOptions::default()) {
-                    Ok(info) => {
-                        let url = format!("rerun+http://127.0.0.1:{}/proxy", info.port);
+                match spawn_viewer() {
+                    Ok(()) => {
+                        let url = super::DEFAULT_CONNECT_URL.to_string();
                         if let Ok(uri) = url.parse::<ProxyUri>() {
                             viewers.push((url, uri));
                         }
                     }
-                    Err(e) => eprintln!(
-                        "{tool}: warning: cannot start the rerun viewer: {}",
-                        first_line(&e.to_string())
-                    ),
+                    Err(e) => eprintln!("{tool}: warning: cannot start the rerun viewer: {e}"),
                 }
             }
             if let (Some(uri), Some(url)) = (connect, &target.connect)
@@ -818,6 +815,40 @@ mod backend {
         }
     }
 
+    /// Starts the `rerun` executable on `PATH` as a viewer listening at the default port,
+    /// unless something listens there already (a viewer: the recording goes to it). Unlike
+    /// `rerun::spawn`, the viewer gets no stdin, stdout or stderr of ours, so that it neither
+    /// writes into the tool's outputs nor holds a pipe open after the tool ends; it runs in its
+    /// own process group, so that Ctrl-C on the tool leaves it open.
+    fn spawn_viewer() -> Result<(), String> {
+        use std::net::{Ipv4Addr, SocketAddr, TcpStream};
+        use std::process::{Command, Stdio};
+        let port = rerun::DEFAULT_SERVER_PORT;
+        let address = SocketAddr::from((Ipv4Addr::LOCALHOST, port));
+        if TcpStream::connect_timeout(&address, Duration::from_millis(200)).is_ok() {
+            return Ok(());
+        }
+        let mut command = Command::new("rerun");
+        command
+            .arg(format!("--port={port}"))
+            .arg("--expect-data-soon")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null());
+        #[cfg(unix)]
+        {
+            use std::os::unix::process::CommandExt;
+            command.process_group(0);
+        }
+        match command.spawn() {
+            Ok(_child) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(
+                "no `rerun` executable on PATH (pip install rerun-sdk==0.36.3 provides it)".into(),
+            ),
+            Err(e) => Err(format!("rerun: {e}")),
+        }
+    }
+
     fn first_line(s: &str) -> &str {
         s.lines().next().unwrap_or("")
     }
@@ -845,8 +876,8 @@ mod backend {
     /// the solver's iterations, the spectra and the reports below.
     fn blueprint(paths: &BTreeSet<String>) -> rerun::blueprint::Blueprint {
         use rerun::blueprint::{
-            BarChartView, Blueprint, BlueprintPanel, ContainerLike, Grid, Horizontal, SelectionPanel,
-            Spatial2DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
+            BarChartView, Blueprint, BlueprintPanel, ContainerLike, Grid, Horizontal,
+            SelectionPanel, Spatial2DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
         };
         let has = |prefix: &str| paths.iter().any(|p| p.starts_with(prefix));
         let mut top: Vec<ContainerLike> = Vec::new();
