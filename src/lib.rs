@@ -17,7 +17,9 @@
 //! - [`io`]: lossless g2o and TORO readers and writers, dialects, precise `PATH:LINE:COL` errors;
 //! - [`graph`]: the data model, kept exactly as read, with a dense index for the numerics;
 //! - [`stats`]: what `pgo-convert --stats` reports;
-//! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them).
+//! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them);
+//! - [`viz`]: what the tools' `--rerun-*` flags record for the rerun viewer (cargo feature
+//!   `rerun`, on by default), with solvers' iterations reported through [`progress`].
 
 pub mod algorithm1;
 pub mod certify;
@@ -31,12 +33,14 @@ pub mod io;
 pub mod manifold;
 pub mod matrix;
 pub mod nullspace;
+pub mod progress;
 pub mod refine;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
 pub mod staircase;
 pub mod stats;
+pub mod viz;
 pub mod weights;
 
 pub use error::{Error, Result};

@@ -15,7 +15,7 @@
 //! τ|Δ|² + κ at (r_i, r_i), κ at (r_j, r_j), −κR at (r_j, r_i), −κR̄ at (r_i, r_j); the rows of
 //! p_0 are dropped (anchoring).
 
-use crate::graph::{Pose2, PoseGraph};
+use crate::graph::{Edge, Pose2, PoseGraph};
 use crate::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
@@ -219,15 +219,19 @@ pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
         .edges
         .iter()
         .zip(weights)
-        .map(|(e, w)| {
-            let (a, b) = (poses[e.i], poses[e.j]);
-            let ri = rotation(a.theta);
-            let t = c64::new(b.x - a.x, b.y - a.y) - ri * translation(e.measurement);
-            let rot = rotation(b.theta) - ri * rotation(e.measurement.theta);
-            w.tau * t.norm_sqr() + w.kappa * rot.norm_sqr()
-        })
+        .map(|(e, w)| edge_cost(e, *w, poses))
         // From +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
         .fold(0.0, |a, b| a + b)
+}
+
+/// The term of one edge in the cost f: τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|² (the
+/// residuals `pgo-solve --rerun-*` colors edges by).
+pub fn edge_cost(e: &Edge, w: EdgeWeight, poses: &[Pose2]) -> f64 {
+    let (a, b) = (poses[e.i], poses[e.j]);
+    let ri = rotation(a.theta);
+    let t = c64::new(b.x - a.x, b.y - a.y) - ri * translation(e.measurement);
+    let rot = rotation(b.theta) - ri * rotation(e.measurement.theta);
+    w.tau * t.norm_sqr() + w.kappa * rot.norm_sqr()
 }
 
 #[cfg(test)]

@@ -8,8 +8,11 @@ complete -c pgo-certify -l estimate -d 'The estimate: a g2o or TORO file whose v
 complete -c pgo-certify -l weights -d 'Edge weights: unit (the paper\'s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)' -r -f -a "unit\t'τ = κ = 1: exactly the paper\'s cost (5)/(8)'
 isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)'"
 complete -c pgo-certify -l tol -d 'Relative suboptimality bound under which the estimate is called certified' -r
+complete -c pgo-certify -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
+complete -c pgo-certify -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-certify -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
 complete -c pgo-certify -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-certify -l json -d 'Print the report as one JSON object on stdout'
+complete -c pgo-certify -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-certify -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-certify -s V -l version -d 'Print version'

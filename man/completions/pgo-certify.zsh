@@ -25,9 +25,12 @@ g2o-cov\:"Covariance, g2o order"))' \
 '--weights=[Edge weights\: unit (the paper'\''s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth\: the SE-Sync/CPL-SLAM objective)]:POLICY:((unit\:"τ = κ = 1\: exactly the paper'\''s cost (5)/(8)"
 isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)"))' \
 '--tol=[Relative suboptimality bound under which the estimate is called certified]:REL:_default' \
+'--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
+'--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--json[Print the report as one JSON object on stdout]' \
+'--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \
 '-V[Print version]' \

@@ -11,6 +11,8 @@ complete -c pgo-convert -l to-dialect -d 'How to write the noise values [default
 toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
 toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
 g2o-cov\t'Covariance, g2o order'"
+complete -c pgo-convert -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
+complete -c pgo-convert -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-convert -l reindex -d 'Renumber vertices 0..n-1 in ascending order of their ids'
 complete -c pgo-convert -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
 complete -c pgo-convert -l allow-indefinite -d 'Accept noise matrices that are not positive definite'
@@ -18,5 +20,6 @@ complete -c pgo-convert -l stats -d 'Print statistics (poses, edges, odometry an
 complete -c pgo-convert -l json -d 'With --stats: one JSON object on stdout'
 complete -c pgo-convert -l timings -d 'Print the time spent reading and writing on stderr'
 complete -c pgo-convert -s q -l quiet -d 'Do not print the summary line on stderr (warnings are still printed)'
+complete -c pgo-convert -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-convert -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-convert -s V -l version -d 'Print version'

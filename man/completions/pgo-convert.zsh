@@ -29,6 +29,8 @@ g2o-cov\:"Covariance, g2o order"))' \
 toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"
 toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D\` as covariances)"
 g2o-cov\:"Covariance, g2o order"))' \
+'--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
+'--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--reindex[Renumber vertices 0..n-1 in ascending order of their ids]' \
 '--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite]' \
@@ -37,6 +39,7 @@ g2o-cov\:"Covariance, g2o order"))' \
 '--timings[Print the time spent reading and writing on stderr]' \
 '-q[Do not print the summary line on stderr (warnings are still printed)]' \
 '--quiet[Do not print the summary line on stderr (warnings are still printed)]' \
+'--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \
 '-V[Print version]' \

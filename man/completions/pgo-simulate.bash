@@ -23,7 +23,7 @@ _pgo__simulate() {
 
     case "${cmd}" in
         pgo__simulate)
-            opts="-n -o -q -h -V --poses --loop-probability --rotation-noise --translation-noise --seed --side --output --to --quiet --help --version"
+            opts="-n -o -q -h -V --poses --loop-probability --rotation-noise --translation-noise --seed --side --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -67,6 +67,14 @@ _pgo__simulate() {
                     ;;
                 --to)
                     COMPREPLY=($(compgen -W "g2o toro" -- "${cur}"))
+                    return 0
+                    ;;
+                --rerun-save)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --rerun-connect)
+                    COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;
                 *)

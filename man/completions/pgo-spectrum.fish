@@ -9,8 +9,11 @@ isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync an
 complete -c pgo-spectrum -s k -l count -d 'How many of the smallest eigenvalues to print (0: all)' -r
 complete -c pgo-spectrum -l solver -d 'SDP solver for the dual' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'
 clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`)'"
+complete -c pgo-spectrum -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
+complete -c pgo-spectrum -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-spectrum -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
 complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-spectrum -l json -d 'Print one JSON object on stdout'
+complete -c pgo-spectrum -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-spectrum -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-spectrum -s V -l version -d 'Print version'

@@ -1,7 +1,7 @@
 //! `pgo-certify`: certify or bound any estimate of a pose graph (e.g. one written by g2o, GTSAM or
 //! pgo-solve).
 
-use super::common::{InputArgs, WeightArgs, num, to_json_line, write_stdout};
+use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout};
 use crate::error::Error;
 use crate::graph::Pose2;
 use crate::io::{self, ReadOptions};
@@ -48,6 +48,9 @@ pub struct Args {
     /// Print the report as one JSON object on stdout
     #[arg(long)]
     pub json: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 /// The report of one connected component.
@@ -97,6 +100,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if !(args.tol >= 0.0 && args.tol.is_finite()) {
         return Err(Error::Invalid("--tol must be a finite number >= 0".into()));
     }
+    let rec = args.rerun.recorder("pgo-certify")?;
     let (graph, _) = args.input.read()?;
     let poses = match &args.estimate {
         None => {
@@ -183,11 +187,30 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             .sqrt(),
         components,
     };
+    // The estimate as the graph to view, and the certificate as a text entry.
+    let mut estimate = graph.clone();
+    estimate.poses = poses;
+    rec.graph(&estimate);
     if args.json {
         write_stdout(to_json_line(&report)?.as_bytes())?;
     } else {
         eprint!("{}", text_report(args, &report));
     }
+    rec.certificate(&crate::viz::Certificate {
+        cost: report.cost,
+        lower_bound: report.lower_bound,
+        certified: report.certified,
+        szep: report
+            .components
+            .iter()
+            .all(|c| c.near_zero_eigenvalues.is_some_and(|z| z <= 1)),
+        near_zero: report
+            .components
+            .iter()
+            .filter_map(|c| c.near_zero_eigenvalues)
+            .sum(),
+    });
+    rec.finish()?;
     Ok(if report.certified {
         ExitCode::SUCCESS
     } else {

@@ -3,6 +3,7 @@
 use crate::error::Error;
 use crate::graph::PoseGraph;
 use crate::io::{self, Dialect, Format, ReadOptions, ReadReport};
+use crate::viz::{self, Recorder};
 use crate::weights::Weights;
 use clap::Args;
 
@@ -54,6 +55,47 @@ pub struct WeightArgs {
     /// kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)
     #[arg(long, value_enum, default_value = "isotropic", value_name = "POLICY")]
     pub weights: Weights,
+}
+
+/// The rerun flags of every tool (`src/viz.rs`; README "Viewing in rerun"). They never change
+/// the tool's other outputs.
+#[derive(Debug, Clone, Args)]
+#[command(next_help_heading = "Viewing in rerun")]
+pub struct RerunArgs {
+    /// Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver
+    /// iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`
+    #[arg(long, value_name = "PATH.rrd")]
+    pub rerun_save: Option<String>,
+
+    /// Stream the recording to a running rerun viewer, at URL if given
+    /// [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning
+    #[arg(
+        long,
+        value_name = "URL",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = viz::DEFAULT_CONNECT_URL
+    )]
+    pub rerun_connect: Option<String>,
+
+    /// Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3)
+    /// and stream the recording to it
+    #[arg(long)]
+    pub rerun_spawn: bool,
+}
+
+impl RerunArgs {
+    /// Starts the recorder these flags ask for (one that does nothing without them).
+    pub fn recorder(&self, tool: &'static str) -> crate::Result<Recorder> {
+        Recorder::start(
+            tool,
+            &viz::Target {
+                save: self.rerun_save.clone(),
+                connect: self.rerun_connect.clone(),
+                spawn: self.rerun_spawn,
+            },
+        )
+    }
 }
 
 /// Largest graph the dense (small-graph) computations accept.

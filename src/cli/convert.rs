@@ -1,6 +1,6 @@
 //! `pgo-convert`: g2o <-> TORO conversion, dialects, statistics.
 
-use super::common::{to_json_line, write_stdout};
+use super::common::{RerunArgs, to_json_line, write_stdout};
 use crate::error::Error;
 use crate::graph::NoiseKind;
 use crate::io::{self, Dialect, Format, ReadOptions, WriteOptions};
@@ -89,6 +89,9 @@ pub struct Args {
     /// Do not print the summary line on stderr (warnings are still printed)
     #[arg(short, long)]
     pub quiet: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 /// Entry point of the `pgo-convert` binary.
@@ -104,10 +107,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         strict: args.strict,
         allow_indefinite: args.allow_indefinite,
     };
+    let rec = args.rerun.recorder("pgo-convert")?;
     let t0 = Instant::now();
     let (mut graph, report) = io::read_path(&args.input, &options)?;
     let read_s = t0.elapsed().as_secs_f64();
     crate::cli::print_warnings(&report.warnings);
+    rec.graph(&graph);
 
     let input_summary = format!(
         "{}: {} poses{}, {} edges; format {} ({}), dialect {} ({})",
@@ -136,6 +141,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         if args.timings {
             eprintln!("timings: read_s={read_s:.6} write_s=0");
         }
+        rec.finish()?;
         return Ok(ExitCode::SUCCESS);
     }
 
@@ -176,6 +182,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if args.timings {
         eprintln!("timings: read_s={read_s:.6} write_s={write_s:.6}");
     }
+    rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }
 

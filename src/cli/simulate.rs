@@ -1,5 +1,6 @@
 //! `pgo-simulate`: random planar pose graphs by the paper's simulation model (Sec. 6, eq. (47)).
 
+use super::common::RerunArgs;
 use crate::io::{self, Format, WriteOptions};
 use crate::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
 use clap::Parser;
@@ -70,6 +71,9 @@ pub struct Args {
     /// Do not print the summary line on stderr
     #[arg(short, long)]
     pub quiet: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 fn parse_poses(s: &str) -> Result<usize, String> {
@@ -128,7 +132,9 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         seed: args.seed,
     };
     config.validate()?;
+    let rec = args.rerun.recorder("pgo-simulate")?;
     let sim = simulate(&config);
+    rec.graph(&sim.graph);
     let format = args
         .to
         .or_else(|| Format::from_extension(&args.output))
@@ -157,5 +163,6 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             },
         );
     }
+    rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }

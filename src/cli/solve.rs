@@ -1,6 +1,8 @@
 //! `pgo-solve`: the globally optimal estimate of a pose graph and the bound that proves it.
 
-use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
+use super::common::{
+    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
+};
 use crate::algorithm1::{ComponentSolution, Rounding, SdpSolver, solve_connected};
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
@@ -71,6 +73,9 @@ pub struct Args {
     /// Leave the timings out of the report (for byte-identical output)
     #[arg(long)]
     pub no_timings: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -180,9 +185,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if !(args.tol >= 0.0 && args.tol.is_finite()) {
         return Err(Error::Invalid("--tol must be a finite number >= 0".into()));
     }
+    let rec = args.rerun.recorder("pgo-solve")?;
     let t0 = Instant::now();
     let (mut graph, read_report) = args.input.read()?;
     let read_s = t0.elapsed().as_secs_f64();
+    rec.graph(&graph);
     if args.method == Method::Sdp {
         check_dense_size(&graph, "pgo-solve")?;
     }
@@ -198,7 +205,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             Method::Auto => part.num_poses() <= AUTO_SDP_MAX_POSES,
         };
         if sdp {
-            let solution = solve_connected(&part, &weights, args.solver)?;
+            let solution = rec.observe(|| solve_connected(&part, &weights, args.solver))?;
             components.push(component_report(&part, &solution, args.tol));
             solutions.push((solution.poses, members));
         } else {
@@ -207,7 +214,22 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 tolerance: args.tol,
                 ..Default::default()
             };
-            let (solution, poses) = solve_graph(&part, &weights, &options, &mut |_| {})
+            // Newton steps on the `iteration` timeline of a rerun recording (crate::progress).
+            let mut step = 0u64;
+            let mut report = |it: &crate::staircase::Iteration| {
+                step += 1;
+                crate::progress::iteration(
+                    step,
+                    &[
+                        ("cost", it.cost),
+                        ("gradient_norm", it.gradient_norm),
+                        ("rank", it.rank as f64),
+                        ("damping", it.damping),
+                    ],
+                );
+            };
+            let (solution, poses) = rec
+                .observe(|| solve_graph(&part, &weights, &options, &mut report))
                 .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
             components.push(staircase_report(&part, &solution, args.tol));
             solutions.push((poses, members));
@@ -229,6 +251,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
     }
     graph.vertices_declared = true;
+    rec.optimized(&graph, policy);
 
     let t2 = Instant::now();
     let output = match (&args.output, args.json) {
@@ -283,6 +306,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     } else {
         eprint!("{}", text_report(&args.input.input, &report));
     }
+    rec.certificate(&crate::viz::Certificate {
+        cost: report.cost,
+        lower_bound: report.lower_bound,
+        certified: report.certified,
+        szep: report.szep,
+        near_zero: report.near_zero_eigenvalues,
+    });
+    rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -1,7 +1,9 @@
 //! `pgo-spectrum`: eigenvalues of the pose graph matrix W, of the penalized matrix W(lambda*)
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
-use super::common::{InputArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout};
+use super::common::{
+    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
+};
 use crate::algorithm1::{SdpSolver, analyze};
 use crate::spectrum::hermitian_eigenvalues;
 use crate::weights::{Weights, edge_weights};
@@ -44,6 +46,9 @@ pub struct Args {
     /// Print one JSON object on stdout
     #[arg(long)]
     pub json: bool,
+
+    #[command(flatten)]
+    pub rerun: RerunArgs,
 }
 
 #[derive(Debug, Serialize)]
@@ -108,7 +113,9 @@ fn smallest(mut v: Vec<f64>, k: usize) -> Vec<f64> {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
+    let rec = args.rerun.recorder("pgo-spectrum")?;
     let (graph, _) = args.input.read()?;
+    rec.graph(&graph);
     check_dense_size(&graph, "pgo-spectrum")?;
     let policy = args.weights.weights;
     let mut components = Vec::new();
@@ -164,6 +171,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         text_report(&report)
     };
     write_stdout(text.as_bytes())?;
+    rec.spectrum(&crate::viz::Spectrum {
+        eigenvalues: &report.eigenvalues,
+        penalized_eigenvalues: &report.penalized_eigenvalues,
+        rotation_eigenvalues: &report.rotation_eigenvalues,
+        near_zero: report.near_zero,
+        szep: report.szep,
+        lower_bound: Some(report.components.iter().map(|c| c.lower_bound).sum()),
+    });
+    rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }
 

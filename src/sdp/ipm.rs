@@ -363,6 +363,19 @@ impl Ipm {
                 self.polish()?;
                 gap = relative_gap(self.bounds());
             }
+            if crate::progress::observed() {
+                // In the original units: the best primal and dual objectives so far, μ.
+                let (p, d) = self.bounds();
+                crate::progress::iteration(
+                    iteration as u64,
+                    &[
+                        ("primal_objective", scale * p),
+                        ("dual_objective", scale * d),
+                        ("relative_gap", gap),
+                        ("mu", scale * mu),
+                    ],
+                );
+            }
             if gap <= options.tolerance {
                 return Ok(iteration);
             }

@@ -1,7 +1,8 @@
-"""Fixtures for the interoperability tests (pgo-convert vs GTSAM and g2o).
+"""Fixtures for the interoperability tests (pgo-convert vs GTSAM and g2o) and the rerun
+recording tests (every tool's --rerun-save, read back with rerun-sdk).
 
 Environment:
-  PGO_BIN_DIR       directory holding the `pgo-convert` binary
+  PGO_BIN_DIR       directory holding the `pgo-*` binaries
                     (default: <repo>/target/release; relative paths are taken from the repo root)
   PGO_DATASETS_DIR  directory holding the public data sets
                     (default: ../shared/datasets relative to the repo root)
@@ -22,18 +23,22 @@ def _bin_dir() -> Path:
     return d if d.is_absolute() else REPO_ROOT / d
 
 
-@pytest.fixture(scope="session")
-def pgo_convert() -> Path:
-    """Path of the binary under test. A missing binary is a failure, not a skip: the suite
-    must never pass vacuously."""
-    exe = _bin_dir() / "pgo-convert"
+def pgo_binary(name: str) -> Path:
+    """Path of the binary `name` under test. A missing binary is a failure, not a skip: the
+    suite must never pass vacuously."""
+    exe = _bin_dir() / name
     if not (exe.is_file() and os.access(exe, os.X_OK)):
         pytest.fail(
-            f"pgo-convert not found at {exe}. Build it first with "
+            f"{name} not found at {exe}. Build it first with "
             f"`cargo build --release` in {REPO_ROOT} (or point PGO_BIN_DIR at it).",
             pytrace=False,
         )
     return exe
+
+
+@pytest.fixture(scope="session")
+def pgo_convert() -> Path:
+    return pgo_binary("pgo-convert")
 
 
 @pytest.fixture(scope="session")
