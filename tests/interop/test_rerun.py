@@ -31,7 +31,7 @@ from conftest import REPO_ROOT, pgo_binary
 
 TOY = REPO_ROOT / "datasets" / "paper_toy.g2o"
 RERUN_CLI = Path(sys.executable).parent / "rerun"
-TOOLS = ["pgo-convert", "pgo-solve", "pgo-spectrum", "pgo-simulate"]
+TOOLS = ["pgo-convert", "pgo-solve", "pgo-spectrum", "pgo-simulate", "pgo-certify"]
 
 # The colors src/viz.rs documents (RGBA, packed as rerun stores them).
 ODOMETRY_RGBA = 0x5A96F0FF
@@ -317,6 +317,28 @@ def test_spectrum_records_eigenvalues_and_the_szep(tmp_path):
     check_graph(rec, "graph", vertices, edges)
 
 
+def test_certify_records_the_estimate_and_its_certificate(datasets_dir, tmp_path):
+    # MIT.g2o's own vertices (odometry): not optimal, exit 1; the recording holds the estimate
+    # (one point per vertex line, one strip per edge, parsed in Python) and the same numbers as
+    # the JSON report.
+    src = datasets_dir / "MIT.g2o"
+    plain = run("pgo-certify", [src, "--json"], tmp_path, check=False)
+    recorded = run("pgo-certify", [src, "--json", "--rerun-save", "v.rrd"], tmp_path, check=False)
+    assert plain.returncode == recorded.returncode == 1
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    report = json.loads(plain.stdout)
+    verify(tmp_path / "v.rrd")
+    rec = Recording(tmp_path / "v.rrd")
+    assert rec.application_id == "pgo-certify"
+    vertices, edges = read_g2o(src)
+    check_graph(rec, "graph", vertices, edges)
+    cert = rec.static["/report/certificate"]
+    assert cert["cost"] == [report["cost"]]
+    assert cert["lower_bound"] == [report["lower_bound"]]
+    assert cert["certified"] == [0.0]
+    assert cert["TextLog:text"][0].startswith("NOT certified")
+
+
 def test_simulate_records_the_generated_graph(tmp_path):
     args = ["-n", "25", "--seed", "7", "--loop-probability", "0.2"]
     plain = run("pgo-simulate", [*args, "-o", "plain.g2o"], tmp_path)
@@ -352,6 +374,7 @@ def test_a_failed_save_is_exit_2_and_writes_nothing(tool, tmp_path):
         "pgo-solve": [TOY, "--weights", "unit", "-o", "out.g2o"],
         "pgo-spectrum": [TOY, "--weights", "unit"],
         "pgo-simulate": ["-o", "out.g2o"],
+        "pgo-certify": [TOY, "--weights", "unit"],
     }[tool]
     proc = run(tool, [*args, "--rerun-save", target], tmp_path, check=False)
     assert proc.returncode == 2
@@ -375,6 +398,7 @@ def test_an_unreachable_viewer_is_a_warning(tool, tmp_path):
         "pgo-solve": [TOY, "--weights", "unit", "--json", "--no-timings"],
         "pgo-spectrum": [TOY, "--weights", "unit"],
         "pgo-simulate": ["-n", "8"],
+        "pgo-certify": [TOY, "--weights", "unit"],
     }[tool]
     plain = run(tool, args, tmp_path, check=False)
     start = time.monotonic()
@@ -426,6 +450,7 @@ def test_a_running_viewer_receives_what_a_file_would_hold(tool, viewer, tmp_path
         "pgo-solve": [TOY, "--weights", "unit", "--json", "--no-timings"],
         "pgo-spectrum": [TOY, "--weights", "unit"],
         "pgo-simulate": ["-n", "8"],
+        "pgo-certify": [TOY, "--weights", "unit"],
     }[tool]
     plain = run(tool, args, tmp_path, check=False)
     proc = run(tool, [*args, f"--rerun-connect={url}", "--rerun-save", "both.rrd"], tmp_path, check=False)
