@@ -302,7 +302,18 @@ fn text_report(input: &str, r: &Report) -> String {
         } else if r.szep {
             "NOT certified: the SZEP holds but the bound exceeds --tol".to_string()
         } else {
-            "NOT certified: null-space estimate (Sec. 5.2); the bound above still holds".to_string()
+            let eig = r
+                .components
+                .iter()
+                .any(|c| c.rounding == Rounding::Eigenvector);
+            format!(
+                "NOT certified: {} estimate (Sec. 5.2); the bound above still holds",
+                if eig {
+                    "eigenvector (the null-space method (46) had no solution)"
+                } else {
+                    "null-space"
+                }
+            )
         },
     );
     if let Some(t) = &r.timings {
