@@ -77,6 +77,10 @@ pub enum Rounding {
     Eigenvector,
     /// Sec. 6: rank-1 rounding of the SDP relaxation's X* (SDP).
     SdpRank1,
+    /// A forest's optimum in closed form (f* = 0, Prop. 6): the measurements composed along the
+    /// tree. Taken where the rounding of the relaxation ends above it, which happens when the
+    /// weights span more than double precision resolves (κ 1e17 next to τ 1).
+    SpanningTree,
 }
 
 /// Algorithm 1 on one connected graph.
@@ -211,7 +215,14 @@ pub fn solve_connected(
             Err(_) => (eigenvector(), Rounding::Eigenvector),
         }
     };
-    let poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut rounding = rounding;
+    if graph.is_forest() {
+        let tree = spanning_tree_estimate(graph);
+        if cost(graph, weights, &tree) < cost(graph, weights, &poses) {
+            (poses, rounding) = (tree, Rounding::SpanningTree);
+        }
+    }
     let mut dual = dual;
     dual.lambda.iter_mut().for_each(|l| *l *= scale);
     dual.dual_objective *= scale;
@@ -365,6 +376,31 @@ pub fn estimate_from_rotations(matrix: &PoseGraphMatrix, r: &[c64], anchor: Pose
     }
     // Positions that overflow next to the anchor's (near 1.8e308): pose 0 at the origin instead
     // (f does not depend on where the estimate is).
+    place(Pose2::new(0.0, 0.0, anchor.theta))
+}
+
+/// The measurements composed along a spanning tree from pose 0, which keeps the anchor's pose
+/// (the others placed from the origin if they would overflow next to it): for a forest, an
+/// optimum (f* = 0).
+pub fn spanning_tree_estimate(graph: &PoseGraph) -> Vec<Pose2> {
+    let mut tree = graph.clone();
+    tree.initialize_spanning_tree();
+    let anchor = graph.poses[0];
+    let place = |at: Pose2| -> Vec<Pose2> {
+        // Pose 0 is the root, at the identity: x_k' = at · x_k.
+        let frame = Pose2::new(at.x, at.y, at.theta).to_isometry();
+        let mut moved: Vec<Pose2> = tree
+            .poses
+            .iter()
+            .map(|p| Pose2::from_isometry(&(frame * p.to_isometry())))
+            .collect();
+        moved[0] = at;
+        moved
+    };
+    let moved = place(anchor);
+    if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+        return moved;
+    }
     place(Pose2::new(0.0, 0.0, anchor.theta))
 }
 
