@@ -77,6 +77,10 @@ pub enum Rounding {
     Eigenvector,
     /// Sec. 6: rank-1 rounding of the SDP relaxation's X* (SDP).
     SdpRank1,
+    /// A forest's optimum in closed form (f* = 0, Prop. 6): the measurements composed along the
+    /// tree. Taken where the rounding of the relaxation ends above it, which happens when the
+    /// weights span more than double precision resolves (κ 1e17 next to τ 1).
+    SpanningTree,
 }
 
 /// Algorithm 1 on one connected graph.
@@ -105,12 +109,14 @@ pub struct ComponentSolution {
 }
 
 /// The dual side of Algorithm 1 on a connected graph, in units of the normalized weights:
-/// the weights divided by `scale`, the power of two nearest their largest value. W̃, M, λ*, the
+/// the weights divided by `scale`, the power of two nearest the lightest weight. W̃, M, λ*, the
 /// bound and the eigenvalues are linear in the weights, so multiplying them by `scale` (exactly)
 /// gives those of the graph's own weights, the bound still proven; the eigenvectors are the same.
-/// The solver's tolerances are relative with a floor of one (a graph with f* = 0 has no relative
-/// gap), so normalizing makes them act the same on a graph whose information matrices are all
-/// 1e-9 or all 1e9 as on one whose are 1, and keeps W̃ finite for weights near 1e±300.
+/// The solver's tolerances and the SZEP's zero test are relative with an absolute floor (a graph
+/// with f* = 0 has no relative gap), which then stands for the lightest edge: the same on a graph
+/// whose information matrices are all 1e-9 or all 1e9 as on one whose are 1, and no edge's share
+/// of W̃(λ*) falls below it (with the largest weight as the unit, the eigenvalues of a tree with
+/// weights 1 and 2e8 dropped under the zero threshold and it lost the SZEP).
 pub struct DualAnalysis {
     /// W̃ of the normalized weights.
     pub matrix: PoseGraphMatrix,
@@ -124,20 +130,32 @@ pub struct DualAnalysis {
     pub scale: f64,
 }
 
+/// The power of two the weights are divided by (see [`DualAnalysis`]): the one nearest the
+/// lightest weight, unless the heaviest would then exceed 2^400 (beyond which squared entries of
+/// W̃ overflow for translations of a few metres; such graphs get the heaviest at 2^400 and their
+/// lightest edges below the tolerances).
+fn normalization(weights: &[EdgeWeight]) -> f64 {
+    let (lightest, heaviest) = weights
+        .iter()
+        .flat_map(|w| [w.tau, w.kappa])
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if heaviest == 0.0 {
+        return 1.0;
+    }
+    let k = (lightest.log2().round() as i32).max(heaviest.log2().ceil() as i32 - 400);
+    2f64.powi(k.clamp(-1000, 1000))
+}
+
 /// Solves the dual SDP of a connected graph and proves its bound (see [`DualAnalysis`]).
 pub fn analyze(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
     solver: SdpSolver,
 ) -> Result<DualAnalysis, Error> {
-    let largest = weights
-        .iter()
-        .fold(0.0f64, |m, w| m.max(w.tau).max(w.kappa));
-    let scale = if largest > 0.0 && largest.is_finite() {
-        2f64.powi((largest.log2().round() as i32).clamp(-1000, 1000))
-    } else {
-        1.0
-    };
+    let scale = normalization(weights);
     let normalized: Vec<EdgeWeight> = weights
         .iter()
         .map(|w| EdgeWeight {
@@ -183,20 +201,28 @@ pub fn solve_connected(
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
     let szep = zeros <= 1;
     let n = graph.num_poses();
-    let rotations: Vec<c64> = if szep {
-        (0..n).map(|k| bound.eigenvectors[(n - 1 + k, 0)]).collect()
+    // The eigenvector of the smallest eigenvalue: the scaled solution with the SZEP (Sec. 5.1);
+    // without it, the null-space method (46), or the eigenvector method (Eig, Sec. 5.2) where
+    // (46) has no solution (a basis whose rotation rows lack full column rank, as with weights
+    // 1 next to 1e200): an estimate all the same, which the proven bound still judges.
+    let eigenvector = || (0..n).map(|k| bound.eigenvectors[(n - 1 + k, 0)]).collect();
+    let (rotations, rounding): (Vec<c64>, _) = if szep {
+        (eigenvector(), Rounding::SzepEigenvector)
     } else {
         let basis = Mat::from_fn(matrix.dim(), zeros, |r, c| bound.eigenvectors[(r, c)]);
-        let x = crate::nullspace::null_space_method(basis.as_ref(), n - 1..2 * n - 1)
-            .map_err(|e| Error::Invalid(e.to_string()))?;
-        x[n - 1..].to_vec()
+        match crate::nullspace::null_space_method(basis.as_ref(), n - 1..2 * n - 1) {
+            Ok(x) => (x[n - 1..].to_vec(), Rounding::NullSpace),
+            Err(_) => (eigenvector(), Rounding::Eigenvector),
+        }
     };
-    let rounding = if szep {
-        Rounding::SzepEigenvector
-    } else {
-        Rounding::NullSpace
-    };
-    let poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut poses = estimate_from_rotations(&matrix, &rotations, graph.poses[0]);
+    let mut rounding = rounding;
+    if graph.is_forest() {
+        let tree = spanning_tree_estimate(graph);
+        if cost(graph, weights, &tree) < cost(graph, weights, &poses) {
+            (poses, rounding) = (tree, Rounding::SpanningTree);
+        }
+    }
     let mut dual = dual;
     dual.lambda.iter_mut().for_each(|l| *l *= scale);
     dual.dual_objective *= scale;
@@ -367,6 +393,31 @@ pub fn move_to_anchor(poses: &[Pose2], anchor: Pose2) -> Vec<Pose2> {
     }
     // Positions that overflow next to the anchor's (near 1.8e308): pose 0 at the origin instead
     // (f does not depend on where the estimate is).
+    place(Pose2::new(0.0, 0.0, anchor.theta))
+}
+
+/// The measurements composed along a spanning tree from pose 0, which keeps the anchor's pose
+/// (the others placed from the origin if they would overflow next to it): for a forest, an
+/// optimum (f* = 0).
+pub fn spanning_tree_estimate(graph: &PoseGraph) -> Vec<Pose2> {
+    let mut tree = graph.clone();
+    tree.initialize_spanning_tree();
+    let anchor = graph.poses[0];
+    let place = |at: Pose2| -> Vec<Pose2> {
+        // Pose 0 is the root, at the identity: x_k' = at · x_k.
+        let frame = Pose2::new(at.x, at.y, at.theta).to_isometry();
+        let mut moved: Vec<Pose2> = tree
+            .poses
+            .iter()
+            .map(|p| Pose2::from_isometry(&(frame * p.to_isometry())))
+            .collect();
+        moved[0] = at;
+        moved
+    };
+    let moved = place(anchor);
+    if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+        return moved;
+    }
     place(Pose2::new(0.0, 0.0, anchor.theta))
 }
 

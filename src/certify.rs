@@ -91,9 +91,12 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
                 a[(r, c)] * (scale[r] * scale[c])
             })
         };
+        // A shift so large that the equilibrated matrix overflows proves nothing (and the
+        // eigensolver would not converge on it).
         let proves = |s: f64| {
             let a = equilibrated(s);
-            hermitian_eigenvalues(&a)[0] >= eigen_error(&a)
+            let error = eigen_error(&a);
+            error.is_finite() && hermitian_eigenvalues(&a)[0] >= error
         };
         // The smallest diagonal scale of the rotation block converts an allowance on the
         // equilibrated matrix into a shift of λ.

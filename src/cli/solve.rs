@@ -377,10 +377,12 @@ fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tol: f64) -> Compon
 
 fn text_report(input: &str, r: &Report) -> String {
     let mut out = format!(
-        "pgo-solve: {}: {} poses, {} edges, {} component{}; weights {}; method {} (sdp solver {})\n",
+        "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {} (sdp solver {})\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
+        if r.poses == 1 { "" } else { "s" },
         r.edges,
+        if r.edges == 1 { "" } else { "s" },
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),
@@ -451,7 +453,17 @@ fn text_report(input: &str, r: &Report) -> String {
         } else if r.szep {
             "NOT certified: the SZEP holds but the bound exceeds --tol".to_string()
         } else {
-            "NOT certified: null-space estimate (Sec. 5.2); the bound above still holds".to_string()
+            let used = |k| r.components.iter().any(|c| c.rounding == Some(k));
+            format!(
+                "NOT certified: {}; the bound above still holds",
+                if used(Rounding::SpanningTree) {
+                    "spanning-tree estimate (a forest, f* = 0, whose relaxation rounded above it)"
+                } else if used(Rounding::Eigenvector) {
+                    "eigenvector estimate (Sec. 5.2: the null-space method (46) had no solution)"
+                } else {
+                    "null-space estimate (Sec. 5.2)"
+                }
+            )
         },
     );
     if let Some(chi2) = r.refined_chi2 {
