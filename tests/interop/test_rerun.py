@@ -488,3 +488,21 @@ def test_a_bad_viewer_url_is_exit_2(tmp_path):
     assert proc.returncode == 2
     assert proc.stdout == b""
     assert b"--rerun-connect=localhost: not the address of a rerun viewer" in proc.stderr
+
+
+def test_staircase_iterations_on_the_timeline(datasets_dir, tmp_path):
+    # MIT.g2o (808 poses) goes to the scalable solver: its Newton steps are on the `iteration`
+    # timeline, the cost never increases, ends at the reported cost, and the rank is 1.
+    args = [datasets_dir / "MIT.g2o", "--json", "--no-timings", "-o", "opt.g2o"]
+    report = json.loads(run("pgo-solve", [*args, "--rerun-save", "s.rrd"], tmp_path).stdout)
+    assert report["components"][0]["method"] == "staircase"
+    rec = Recording(tmp_path / "s.rrd")
+    cost = [row["Scalars:scalars"][0] for _, row in rec.series["/solver/cost"]]
+    steps = [step for step, _ in rec.series["/solver/cost"]]
+    assert steps == list(range(steps[0], steps[0] + len(steps)))
+    assert len(cost) >= report["components"][0]["iterations"] - 2
+    assert all(b <= a for a, b in zip(cost, cost[1:]))
+    assert cost[-1] == pytest.approx(report["cost"], rel=1e-12)
+    ranks = {row["Scalars:scalars"][0] for _, row in rec.series["/solver/rank"]}
+    assert ranks == {1.0}
+    assert all(row["Scalars:scalars"][0] >= 0 for _, row in rec.series["/solver/gradient_norm"])
