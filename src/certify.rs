@@ -139,7 +139,7 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
 /// success proves D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 under that backward-error model, i.e.
 /// W̃(λ) + ηP ⪰ 0. (The worst-case componentwise bound, γ_k times the fill, would be ~100x
 /// larger and the bound it gives too loose to certify at 1e-6; an a-posteriori residual in
-/// double-double would make the proof unconditional: see [`SparseFactor::backward_error`].)
+/// double-double would make the proof unconditional.)
 ///
 /// η is searched upward by factors of 2 from 1.25·η_res ([`SparseCertifier::resolution`]), the
 /// smallest value at which the estimate's own direction x (W̃(λ)x ≈ 0, x*(ηP)x = ηn) clears α in
@@ -194,32 +194,26 @@ impl SparseCertifier {
     /// direction x (W̃(λ)x ≈ 0, x*(ηP)x = η‖Y‖²) cannot clear the allowance α in equilibrated
     /// coordinates, η_res = α·Σ_k ‖x_k‖²/D_k² / n (`x` row-major with `p` entries per row).
     pub fn resolution(&self, lambda: &[f64], x: &[c64], p: usize) -> f64 {
-        let dim = self.diagonal.len();
-        let n = lambda.len();
-        let rot0 = dim - n;
-        let alpha = self.alpha0(lambda);
-        let weight: f64 = (0..dim)
-            .map(|k| {
-                let w = self.entries[self.diagonal[k]].2.re;
-                let a = if k >= rot0 {
-                    (w - lambda[k - rot0]).abs()
-                } else {
-                    w
-                };
-                let e = (a.max(f64::MIN_POSITIVE).log2() / 2.0).floor();
-                let inv_d2 = 2f64.powi(2 * e as i32);
-                inv_d2
-                    * x[k * p..(k + 1) * p]
-                        .iter()
-                        .map(|z| z.norm_sqr())
-                        .sum::<f64>()
+        let Some((a, scale)) = self.scaling(lambda, 0.0, true) else {
+            return f64::INFINITY;
+        };
+        let alpha = self.alpha(&a, &scale);
+        let weight: f64 = scale
+            .iter()
+            .enumerate()
+            .map(|(k, d)| {
+                x[k * p..(k + 1) * p]
+                    .iter()
+                    .map(|z| z.norm_sqr())
+                    .sum::<f64>()
+                    / (d * d)
             })
             .sum();
         let max_w = self
             .diagonal
             .iter()
             .fold(0.0f64, |m, &k| m.max(self.entries[k].2.re));
-        (alpha * weight / n as f64)
+        (alpha * weight / lambda.len() as f64)
             .max(1e-15 * max_w)
             .max(f64::MIN_POSITIVE)
     }
@@ -234,7 +228,6 @@ impl SparseCertifier {
         eta_max: f64,
     ) -> Option<SparseBound> {
         let n = lambda.len();
-        let alpha0 = self.alpha0(lambda);
         let mut eta = 1.25 * self.resolution(lambda, x, p);
         let sum: f64 = lambda.iter().sum();
         let sum_error = 2.0 * n as f64 * f64::EPSILON * lambda.iter().map(|l| l.abs()).sum::<f64>();
@@ -242,7 +235,7 @@ impl SparseCertifier {
         let mut attempts = 0;
         while eta <= eta_max && eta.is_finite() && attempts < 80 {
             attempts += 1;
-            if let Some(alpha) = self.try_eta(lambda, eta, alpha0) {
+            if let Some(alpha) = self.try_eta(lambda, eta) {
                 return Some(SparseBound {
                     eta,
                     lower_bound: sum - n as f64 * eta - sum_error,
@@ -257,19 +250,10 @@ impl SparseCertifier {
     /// The resolution of eigenvalues of W̃(λ) in its own units: the allowance α₀ of the
     /// equilibrated matrix times the largest diagonal entry (Weyl's inequality after undoing D).
     pub fn eigenvalue_resolution(&self, lambda: &[f64]) -> f64 {
-        let dim = self.diagonal.len();
-        let rot0 = dim - lambda.len();
-        let max_a = (0..dim)
-            .map(|k| {
-                let w = self.entries[self.diagonal[k]].2.re;
-                if k >= rot0 {
-                    (w - lambda[k - rot0]).abs()
-                } else {
-                    w
-                }
-            })
-            .fold(0.0f64, f64::max);
-        self.alpha0(lambda) * max_a
+        match self.scaling(lambda, 0.0, true) {
+            Some((a, scale)) => self.alpha(&a, &scale) * a.iter().fold(0.0f64, |m, &v| m.max(v)),
+            None => f64::INFINITY,
+        }
     }
 
     /// The diagonal a_k of W̃(λ) + ηP (absolute values when `absolute`, for estimates) and the
@@ -317,15 +301,8 @@ impl SparseCertifier {
         dim as f64 * (f64::EPSILON / 2.0) * norm
     }
 
-    fn alpha0(&self, lambda: &[f64]) -> f64 {
-        match self.scaling(lambda, 0.0, true) {
-            Some((a, scale)) => self.alpha(&a, &scale),
-            None => f64::INFINITY,
-        }
-    }
-
     /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Returns α on success.
-    fn try_eta(&mut self, lambda: &[f64], eta: f64, _alpha0: f64) -> Option<f64> {
+    fn try_eta(&mut self, lambda: &[f64], eta: f64) -> Option<f64> {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
         let (a, scale) = self.scaling(lambda, eta, false)?;

@@ -4,8 +4,8 @@
 //!
 //! A thin layer over faer's low-level `sparse::linalg::cholesky` API: faer's high-level `Llt`
 //! allocates its workspace on every factorization and exposes neither the pivots of an LDLᴴ
-//! (needed for inertia) nor the factor's row counts (needed for the rounding-error bound of
-//! [`SparseFactor::backward_error`]), so both are read here from the symbolic structure.
+//! (needed for inertia) nor the factor's columns (needed for negative-curvature directions), so
+//! both are read here from the numeric factor and its symbolic structure.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -243,62 +243,6 @@ impl<T: Scalar> SparseFactor<T> {
             None => out = v,
         }
         Some(out)
-    }
-
-    /// The largest number of nonzeros in a row of the factor L (the length of the longest inner
-    /// product the factorization forms), and in a row of the filled pattern L + Lᴴ.
-    pub fn fill_counts(&self) -> (usize, usize) {
-        let n = self.dim();
-        let mut row = vec![0usize; n];
-        let mut col = vec![0usize; n];
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let (cp, ri) = (s.col_ptr(), s.row_idx());
-                for j in 0..n {
-                    col[j] = cp[j + 1] - cp[j];
-                    for &i in &ri[cp[j]..cp[j + 1]] {
-                        row[i] += 1;
-                    }
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let begin = s.supernode_begin();
-                let end = s.supernode_end();
-                for k in 0..s.n_supernodes() {
-                    let (b, e) = (begin[k], end[k]);
-                    let pattern = s.supernode(k).pattern();
-                    for j in b..e {
-                        col[j] = e - j + pattern.len();
-                        row[j] += j - b + 1;
-                    }
-                    for &i in pattern {
-                        row[i] += e - b;
-                    }
-                }
-            }
-        }
-        let k = row.iter().copied().max().unwrap_or(0);
-        let c = (0..n).map(|i| row[i] + col[i]).max().unwrap_or(0);
-        (k, c)
-    }
-
-    /// The worst-case componentwise allowance: a successful floating-point LLᴴ of a matrix A with
-    /// unit-scale diagonal (a_kk ≤ `max_diagonal`) proves A + α I ⪰ 0 for this α.
-    /// (Not used by the certificate, which takes the normwise dim·u·‖A‖ model; kept to state and
-    /// test how much more a fully rigorous constant would cost.)
-    ///
-    /// The computed factor R̃ satisfies R̃ᴴR̃ = A + ΔA with |ΔA| ≤ γ |R̃ᴴ||R̃| entrywise,
-    /// γ = γ_k = k·u/(1 − k·u) for inner products of length k (Higham, Accuracy and Stability of
-    /// Numerical Algorithms, Thm. 10.5; the same form holds for faer's blocked supernodal kernels,
-    /// which only reorder those sums). Since (|R̃ᴴ||R̃|)_ij ≤ ‖r̃_i‖‖r̃_j‖, ‖r̃_i‖² ≤ (1+γ) a_ii, and
-    /// row i of the filled pattern has at most c entries, |vᴴΔAv| ≤ γ(1+γ)·c·max a_ii·‖v‖².
-    /// Complex arithmetic and the rounding of A's own entries are covered by taking k' = 2k + 4
-    /// and doubling the result.
-    pub fn backward_error(&self, max_diagonal: f64) -> f64 {
-        let (k, c) = self.fill_counts();
-        let ku = (2 * k + 4) as f64 * f64::EPSILON / 2.0;
-        let gamma = ku / (1.0 - ku);
-        2.0 * gamma * (1.0 + gamma) * c as f64 * max_diagonal
     }
 }
 

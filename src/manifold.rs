@@ -202,9 +202,10 @@ impl Problem {
 /// ℝ^{2p} (the last 2p − 1 columns of the Householder reflector that maps y to ±e_1).
 pub struct TangentBasis {
     pub p: usize,
-    /// Per row: offset of its first coordinate, and its vectors (d_k of them, p entries each).
+    /// Per row: offset of its first coordinate (row k has coordinates offsets[k]..offsets[k+1]).
     pub offsets: Vec<usize>,
-    pub vectors: Vec<Vec<c64>>,
+    /// The basis vectors of all coordinates in order, p entries each (one allocation).
+    pub vectors: Vec<c64>,
     pub dim: usize,
 }
 
@@ -213,18 +214,16 @@ impl TangentBasis {
         let p = x.p;
         let rows = problem.rows();
         let mut offsets = Vec::with_capacity(rows + 1);
-        let mut vectors = Vec::with_capacity(rows);
-        let mut off = 0;
+        let mut vectors = Vec::with_capacity(rows * 2 * p * p);
         for k in 0..rows {
-            offsets.push(off);
-            let basis = if k < problem.n - 1 {
-                position_basis(p)
+            offsets.push(vectors.len() / p);
+            if k < problem.n - 1 {
+                position_basis(p, &mut vectors);
             } else {
-                sphere_basis(x.row(k))
-            };
-            off += basis.len() / p;
-            vectors.push(basis);
+                sphere_basis(x.row(k), &mut vectors);
+            }
         }
+        let off = vectors.len() / p;
         offsets.push(off);
         TangentBasis {
             p,
@@ -241,7 +240,8 @@ impl TangentBasis {
 
     /// The s-th basis vector of row k.
     pub fn vector(&self, k: usize, s: usize) -> &[c64] {
-        &self.vectors[k][s * self.p..(s + 1) * self.p]
+        let start = (self.offsets[k] + s) * self.p;
+        &self.vectors[start..start + self.p]
     }
 
     /// Coordinates of a (2n−1)×p matrix's rows in the basis: Re⟨b, v⟩.
@@ -326,9 +326,10 @@ impl TangentBasis {
         let mut y = x.clone();
         for k in 0..self.offsets.len() - 1 {
             let row = y.row_mut(k);
-            for s in 0..self.offsets[k + 1] - self.offsets[k] {
-                let d = delta[self.offsets[k] + s];
-                for (z, b) in row.iter_mut().zip(&self.vectors[k][s * p..(s + 1) * p]) {
+            let (lo, hi) = (self.offsets[k], self.offsets[k + 1]);
+            let basis = self.vectors[lo * p..hi * p].chunks_exact(p);
+            for (&d, b) in delta[lo..hi].iter().zip(basis) {
+                for (z, b) in row.iter_mut().zip(b) {
                     *z += b * d;
                 }
             }
@@ -343,21 +344,23 @@ impl TangentBasis {
     }
 }
 
-fn position_basis(p: usize) -> Vec<c64> {
-    let mut out = vec![c64::new(0.0, 0.0); 2 * p * p];
+/// Appends e_c and i·e_c, c = 0..p (2p vectors of ℂ^p).
+fn position_basis(p: usize, out: &mut Vec<c64>) {
+    let start = out.len();
+    out.resize(start + 2 * p * p, c64::new(0.0, 0.0));
     for c in 0..p {
-        out[(2 * c) * p + c] = c64::new(1.0, 0.0);
-        out[(2 * c + 1) * p + c] = c64::new(0.0, 1.0);
+        out[start + (2 * c) * p + c] = c64::new(1.0, 0.0);
+        out[start + (2 * c + 1) * p + c] = c64::new(0.0, 1.0);
     }
-    out
 }
 
-/// 2p − 1 orthonormal vectors of ℝ^{2p} ≅ ℂ^p orthogonal to the unit vector y.
-fn sphere_basis(y: &[c64]) -> Vec<c64> {
+/// Appends 2p − 1 orthonormal vectors of ℝ^{2p} ≅ ℂ^p orthogonal to the unit vector y.
+fn sphere_basis(y: &[c64], out: &mut Vec<c64>) {
     let p = y.len();
     if p == 1 {
         // i·y: the rotation's tangent e^{iθ} → i e^{iθ}.
-        return vec![c64::new(-y[0].im, y[0].re)];
+        out.push(c64::new(-y[0].im, y[0].re));
+        return;
     }
     // Real vector v = (Re y_0, Im y_0, ...); Householder H = I − 2uuᵀ/‖u‖², u = v + sign(v_0) e_0,
     // maps v to −sign(v_0) e_0; columns 1..2p of H span v⊥.
@@ -367,16 +370,13 @@ fn sphere_basis(y: &[c64]) -> Vec<c64> {
     let mut u = v.clone();
     u[0] += sign;
     let uu: f64 = u.iter().map(|a| a * a).sum();
-    let mut out = Vec::with_capacity((m - 1) * p);
+    let h =
+        |row: usize, col: usize| (if row == col { 1.0 } else { 0.0 }) - 2.0 * u[row] * u[col] / uu;
     for col in 1..m {
-        let h: Vec<f64> = (0..m)
-            .map(|row| (if row == col { 1.0 } else { 0.0 }) - 2.0 * u[row] * u[col] / uu)
-            .collect();
         for c in 0..p {
-            out.push(c64::new(h[2 * c], h[2 * c + 1]));
+            out.push(c64::new(h(2 * c, col), h(2 * c + 1, col)));
         }
     }
-    out
 }
 
 /// The Newton system's sparse matrix for a fixed rank and pattern.

@@ -370,18 +370,6 @@ pub fn optimize_to(
     }
 }
 
-/// The staircase on a connected graph: returns the certified optimum when the relaxation is
-/// exact and the certificate succeeds, else the best rank-1 estimate with the bound proven.
-pub fn solve(
-    problem: &Problem,
-    options: &StaircaseOptions,
-    observer: &mut dyn FnMut(&Iteration),
-) -> Option<StaircaseSolution> {
-    let r = chordal_rotations(problem)?;
-    let start = with_optimal_positions(problem, &r)?;
-    Some(solve_from(problem, start, options, observer))
-}
-
 /// The staircase from a rank-1 starting point.
 pub fn solve_from(
     problem: &Problem,
