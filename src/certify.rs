@@ -24,7 +24,9 @@
 //! bounds is reported.
 
 use crate::factor::{Assembly, SparseFactor};
+use crate::manifold::{Enclosure, Point, Problem};
 use crate::matrix::PoseGraphMatrix;
+use crate::rounding::{U, gamma};
 use crate::spectrum::{hermitian_eigen, hermitian_eigenvalues};
 use faer::{Mat, c64};
 
@@ -126,8 +128,15 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
     })
 }
 
-/// The sparse certificate of the scalable solver (DESIGN.md §3.2): for multipliers λ (from the
-/// first-order conditions at an estimate), a successful LLᴴ factorization of
+/// The sparse certificate of the scalable solver (DESIGN.md §3.2). For a rank-1 estimate the
+/// proof is the deflated one of [`SparseCertifier::certify_rank_one`] (LDLᴴ inertia for the gap,
+/// Temple's inequality for the estimate's own eigenvalue), whose loss is set by the estimate's
+/// residual rather than the factorization's rounding. Where that cannot isolate one eigenvalue,
+/// and above rank 1, the proof is the shifted factorization below
+/// ([`SparseCertifier::certify_cholesky`]).
+///
+/// For multipliers λ (from the first-order conditions at an estimate), a successful LLᴴ
+/// factorization of
 /// W̃(λ) + η·blkdiag(0, I) proves λ − η1 dual feasible (eq. (31)), so
 /// `lower_bound = Σλ − n·η ≤ d* ≤ f*` (weak duality (32)).
 ///
@@ -154,6 +163,8 @@ pub struct SparseCertifier {
     values: Vec<c64>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
+    /// The shift μ of the last successful [`Self::gap`], where the next one starts looking.
+    last_mu: Option<f64>,
 }
 
 /// The outcome of [`SparseCertifier::certify`].
@@ -163,8 +174,15 @@ pub struct SparseBound {
     pub eta: f64,
     /// Σλ − n·η, less the rounding of the sum: a lower bound on f*.
     pub lower_bound: f64,
-    /// The backward-error allowance α used (equilibrated units).
+    /// The backward-error allowance α used (equilibrated units; 0 for a deflated proof).
     pub alpha: f64,
+    /// For a deflated proof ([`SparseCertifier::certify_rank_one`]): θ, a proven lower bound on
+    /// the second smallest eigenvalue of D W̃(λ) D (equilibrated units), so W̃(λ) has exactly one
+    /// eigenvalue below θ·min_k D_k⁻² (or none, when `eta` is 0 because W̃(λ) ≻ 0 was shown).
+    pub gap: Option<f64>,
+    /// For a deflated proof: the number of eigenvalues of D W̃(λ) D below θ, proven (1, or 0 when
+    /// W̃(λ) ≻ 0 was shown outright).
+    pub near_zero: Option<usize>,
 }
 
 impl SparseCertifier {
@@ -187,6 +205,7 @@ impl SparseCertifier {
             entries: upper.to_vec(),
             values: Vec::with_capacity(upper.len()),
             factorizations: 0,
+            last_mu: None,
         }
     }
 
@@ -218,9 +237,27 @@ impl SparseCertifier {
             .max(f64::MIN_POSITIVE)
     }
 
-    /// Tries to prove W̃(λ) + ηP ⪰ 0 for η = 1.25·η_res·2^j ≤ `eta_max` ([`Self::resolution`]);
-    /// returns the first η proven (within a factor 2 of the smallest provable).
+    /// Proves W̃(λ) + ηP ⪰ 0 for the smallest η ≤ `eta_max` it can reach at the estimate `x`:
+    /// the deflated proof of [`Self::certify_rank_one`] for a rank-1 estimate, and where that
+    /// fails (or above rank 1), the shifted factorization of [`Self::certify_cholesky`].
     pub fn certify(
+        &mut self,
+        problem: &Problem,
+        x: &Point,
+        lambda: &[f64],
+        eta_max: f64,
+    ) -> Option<SparseBound> {
+        if x.p == 1
+            && let Some(bound) = self.certify_rank_one(problem, x, lambda, eta_max)
+        {
+            return Some(bound);
+        }
+        self.certify_cholesky(lambda, &x.x, x.p, eta_max)
+    }
+
+    /// Tries to prove W̃(λ) + ηP ⪰ 0 for η = 1.25·η_res·2^j ≤ `eta_max` ([`Self::resolution`])
+    /// by one LLᴴ each; returns the first η proven (within a factor 2 of the smallest provable).
+    pub fn certify_cholesky(
         &mut self,
         lambda: &[f64],
         x: &[c64],
@@ -240,9 +277,126 @@ impl SparseCertifier {
                     eta,
                     lower_bound: sum - n as f64 * eta - sum_error,
                     alpha,
+                    gap: None,
+                    near_zero: None,
                 });
             }
             eta *= 2.0;
+        }
+        None
+    }
+
+    /// The deflated certificate of a rank-1 estimate x (p = 1), which sidesteps the resolution
+    /// limit of [`Self::certify_cholesky`]: at an optimum W̃(λ)x ≈ 0, so W̃(λ) + ηP has an
+    /// eigenvalue of the order of η‖Y‖²/‖x‖², which no factorization resolves below its backward
+    /// error. Instead, with D the equilibration of [`Self::scaling`], T(η) = D(W̃(λ) + ηP)D and
+    /// z = D⁻¹x:
+    ///
+    /// 1. the gap ([`Self::gap`]): one LDLᴴ of D W̃(λ) D − μI with exactly one negative pivot
+    ///    proves λ₂(T(η)) ≥ λ₂(T(0)) ≥ θ = μ − (backward error) > 0 (Sylvester's law of inertia,
+    ///    Weyl's inequality; ηDPD ⪰ 0);
+    /// 2. Temple's inequality for the Rayleigh quotient ρ = z*Tz/z*z and the residual
+    ///    ε = ‖Tz − ρz‖/‖z‖: if ρ < θ ≤ λ₂ then λ₁(T) ≥ ρ − ε²/(θ − ρ). Here
+    ///    z*T(η)z = f(x) − Σ_a λ_a|y_a|² + η‖Y‖² and Tz = D(W̃x − diag(0, λ − η)x) are computed
+    ///    from the edges' residuals with rigorous rounding bounds ([`Problem::enclose`]), so the
+    ///    loss is of the order of ‖D·gradient‖²/θ instead of the factorization's backward error
+    ///    times the estimate's spread;
+    /// 3. η is the smallest value found with ρ(θ − ρ) ≥ ε² (all quantities enclosed), so
+    ///    λ₁(T(η)) ≥ 0, W̃(λ − η1) ⪰ 0 and `lower_bound = Σλ − nη` (weak duality (32)).
+    ///
+    /// `None` when the inertia does not isolate one eigenvalue (a saddle, a relaxation that is not
+    /// exact, or a gap below the rounding level) or η would exceed `eta_max`.
+    pub fn certify_rank_one(
+        &mut self,
+        problem: &Problem,
+        x: &Point,
+        lambda: &[f64],
+        eta_max: f64,
+    ) -> Option<SparseBound> {
+        if x.p != 1 || x.x.len() != self.diagonal.len() {
+            return None;
+        }
+        let n = lambda.len();
+        let (_, scale) = self.scaling(lambda, 0.0, true)?;
+        let gap = self.gap(problem, lambda, &scale)?;
+        let (eta, theta, near_zero) = match gap {
+            Gap::Definite(theta) => (0.0, theta, 0),
+            Gap::Isolated(theta) => {
+                let enclosure = problem.enclose(x);
+                let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
+                (rayleigh.smallest_eta(theta, eta_max)?, theta, 1)
+            }
+        };
+        if eta.is_nan() || eta > eta_max {
+            return None;
+        }
+        let sum: f64 = lambda.iter().sum();
+        let sum_error = 2.0 * n as f64 * f64::EPSILON * lambda.iter().map(|l| l.abs()).sum::<f64>();
+        Some(SparseBound {
+            eta,
+            lower_bound: sum - n as f64 * eta - sum_error,
+            alpha: 0.0,
+            gap: Some(theta),
+            near_zero: Some(near_zero),
+        })
+    }
+
+    /// θ ≤ λ₂(D W̃(λ) D): the inertia of an LDLᴴ of B = D W̃(λ) D − μI. With exactly one negative
+    /// pivot and none zero, B + E has one negative eigenvalue, E the LDLᴴ's backward error
+    /// ([`SparseFactor::ldlt_backward_error`]) plus the rounding of B's diagonal plus the
+    /// difference between the stored W̃ and the exact Σ_e of the edges' terms
+    /// ([`assembly_error`]); so λ₂ of the exact D W̃(λ) D is at least θ = μ − ‖E‖. With no negative
+    /// pivot, λ₁ ≥ θ and W̃(λ) ≻ 0 outright. μ starts at 2⁻⁴ (B's diagonal lies in [1, 4) before
+    /// the shift), or 64 times the last μ that worked, and is divided by 64 while more than one
+    /// pivot is negative (at most 8 factorizations).
+    fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
+        let dim = self.diagonal.len();
+        let rot0 = dim - lambda.len();
+        let assembly = assembly_error(problem, scale);
+        let mut mu = self
+            .last_mu
+            .map_or(1.0 / 16.0, |m| (64.0 * m).min(1.0 / 16.0));
+        for _ in 0..8 {
+            let mut form = f64::MIN_POSITIVE;
+            self.values.clear();
+            for &(r, c, v) in &self.entries {
+                let s = scale[r] * scale[c];
+                self.values.push(if r == c {
+                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                    form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
+                    c64::new((v.re - l) * s - mu, 0.0)
+                } else {
+                    v * s
+                });
+            }
+            if self
+                .values
+                .iter()
+                .any(|v| !(v.re.is_finite() && v.im.is_finite()))
+            {
+                return None;
+            }
+            self.assembly.fill(&self.values);
+            self.factorizations += 1;
+            if self.factor.ldlt(self.assembly.matrix.as_ref()).is_ok() {
+                let negative = self.factor.inertia_below(0.0);
+                if negative <= 1 {
+                    let theta = mu - self.factor.ldlt_backward_error() - assembly - form;
+                    if theta.is_nan() || theta <= 0.0 {
+                        return None;
+                    }
+                    self.last_mu = Some(mu);
+                    return Some(if negative == 0 {
+                        Gap::Definite(theta)
+                    } else {
+                        Gap::Isolated(theta)
+                    });
+                }
+            }
+            mu /= 64.0;
+            if mu < 1e3 * assembly {
+                break;
+            }
         }
         None
     }
@@ -364,10 +518,198 @@ impl SparseCertifier {
     }
 }
 
+/// What the inertia of [`SparseCertifier::gap`] proved about D W̃(λ) D.
+#[derive(Debug, Clone, Copy)]
+enum Gap {
+    /// λ₁ ≥ θ > 0.
+    Definite(f64),
+    /// λ₂ ≥ θ > 0 and λ₁ < θ.
+    Isolated(f64),
+}
+
+/// A bound on ‖D(W̃_stored − W̃)D‖₂, W̃ = Σ_e W̃_e the exact sum of the edges' terms (the matrix of
+/// [`Problem::cost`]) and W̃_stored its floating-point assembly: each stored entry sums at most
+/// 2·deg + 2 contributions of at most 4 roundings each (deg the largest number of edges at a pose),
+/// so |ΔW̃| ≤ γ_{2·deg+8} Σ_e |W̃_e| entrywise, and the ∞-norm of D(Σ_e |W̃_e|)D is summed edge by
+/// edge (doubled for the rounding of those sums).
+fn assembly_error(problem: &Problem, scale: &[f64]) -> f64 {
+    let mut degree = vec![0usize; problem.n];
+    let mut rows = vec![0.0; scale.len()];
+    for t in &problem.terms {
+        degree[t.i] += 1;
+        degree[t.j] += 1;
+        let (yi, yj) = (problem.rotation_row(t.i), problem.rotation_row(t.j));
+        let (dyi, dyj) = (scale[yi], scale[yj]);
+        let pi = problem.position_row(t.i).map(|r| (r, scale[r]));
+        let pj = problem.position_row(t.j).map(|r| (r, scale[r]));
+        let (dpi, dpj) = (pi.map_or(0.0, |p| p.1), pj.map_or(0.0, |p| p.1));
+        let (tau, kappa, dn) = (t.tau.abs(), t.kappa.abs(), t.delta.norm());
+        if let Some((r, d)) = pi {
+            rows[r] += tau * d * (d + dpj + dn * dyi);
+        }
+        if let Some((r, d)) = pj {
+            rows[r] += tau * d * (d + dpi + dn * dyi);
+        }
+        rows[yi] += dyi * ((tau * dn * dn + kappa) * dyi + tau * dn * (dpi + dpj) + kappa * dyj);
+        rows[yj] += kappa * dyj * (dyj + dyi);
+    }
+    let deg = degree.iter().copied().max().unwrap_or(0);
+    let norm = rows.iter().fold(0.0f64, |m, &r| m.max(r));
+    2.0 * gamma(2 * deg + 8) * norm
+}
+
+/// The Rayleigh quotient ρ of z = D⁻¹x for T(η) = D(W̃(λ) + ηP)D and its residual, enclosed
+/// (Temple's inequality in [`SparseCertifier::certify_rank_one`]). z*T(η)z = F + η‖Y‖² with
+/// F = f(x) − Σ_a λ_a|y_a|² = x*W̃(λ)x, and z*z = N = Σ_k |x_k|²/D_k²; each is kept with a bound on
+/// its rounding error. η may be negative (λ raised): F > 0 when the positions are not exactly
+/// stationary, and the bound Σλ − nη then recovers it.
+struct Rayleigh<'a> {
+    enclosure: &'a Enclosure,
+    x: &'a [c64],
+    lambda: &'a [f64],
+    scale: &'a [f64],
+    f: f64,
+    f_error: f64,
+    y: f64,
+    y_error: f64,
+    norm: f64,
+    norm_error: f64,
+    /// max_a D_a² over the rotation rows: ‖DPD‖₂, by which a negative η lowers λ₂ (Weyl).
+    rotation_scale: f64,
+}
+
+impl<'a> Rayleigh<'a> {
+    fn new(enclosure: &'a Enclosure, x: &'a [c64], lambda: &'a [f64], scale: &'a [f64]) -> Self {
+        let (dim, n) = (x.len(), lambda.len());
+        let rot0 = dim - n;
+        let y: f64 = x[rot0..].iter().map(|z| z.norm_sqr()).sum();
+        let norm: f64 = x
+            .iter()
+            .zip(scale)
+            .map(|(z, d)| z.norm_sqr() / (d * d))
+            .sum();
+        let (mut s, mut s_abs) = (0.0, 0.0);
+        for (l, z) in lambda.iter().zip(&x[rot0..]) {
+            s += l * z.norm_sqr();
+            s_abs += l.abs() * z.norm_sqr();
+        }
+        let f = enclosure.cost - s;
+        let f_error = enclosure.cost_error
+            + gamma(n + 4) * s_abs
+            + 2.0 * U * (enclosure.cost.abs() + s.abs());
+        let rotation_scale = scale[rot0..].iter().fold(0.0f64, |m, d| m.max(d * d));
+        Rayleigh {
+            enclosure,
+            x,
+            lambda,
+            scale,
+            f,
+            f_error,
+            y,
+            y_error: gamma(n + 3) * y,
+            norm,
+            norm_error: gamma(dim + 4) * norm,
+            rotation_scale,
+        }
+    }
+
+    /// Lower and upper bounds on z*T(η)z.
+    fn numerator(&self, eta: f64) -> (f64, f64) {
+        let slack = 4.0 * U * (self.f.abs() + self.f_error + eta.abs() * self.y);
+        let (y_lo, y_hi) = (self.y - self.y_error, self.y + self.y_error);
+        let (a, b) = (eta * y_lo, eta * y_hi);
+        (
+            self.f - self.f_error + a.min(b) - slack,
+            self.f + self.f_error + a.max(b) + slack,
+        )
+    }
+
+    /// The η at which the lower bound of z*T(η)z reaches `target`.
+    fn eta_for(&self, target: f64) -> f64 {
+        let (f_lo, _) = self.numerator(0.0);
+        let need = target - f_lo;
+        let y = if need >= 0.0 {
+            self.y - self.y_error
+        } else {
+            self.y + self.y_error
+        };
+        need / y * (1.0 + 1e-6) + 1e-6 * need.abs() / y
+    }
+
+    /// Whether Temple's inequality proves λ₁(T(η)) ≥ 0, given λ₂(T(0)) ≥ θ (so
+    /// λ₂(T(η)) ≥ θ + min(η, 0)·max_a D_a²). `Err(Some(η'))`: not at η, try η' (the η whose ρ
+    /// would clear the residual at η); `Err(None)`: ρ reaches θ, no η will do.
+    fn check(&self, theta: f64, eta: f64) -> Result<(), Option<f64>> {
+        let theta = theta + eta.min(0.0) * self.rotation_scale * (1.0 + 4.0 * U);
+        let (num_lo, num_hi) = self.numerator(eta);
+        let (norm_lo, norm_hi) = (self.norm - self.norm_error, self.norm + self.norm_error);
+        if !(norm_lo > 0.0 && theta > 0.0) {
+            return Err(None);
+        }
+        let rho_hi = num_hi.max(0.0) / norm_lo * (1.0 + 2.0 * U);
+        if rho_hi.is_nan() || rho_hi >= theta {
+            return Err(None);
+        }
+        let sigma = 0.5 * (num_lo.max(0.0) / norm_hi + rho_hi);
+        // ‖Tz − σz‖ ≥ ‖Tz − ρz‖ for any σ (ρ minimizes it): the residual at σ, enclosed.
+        let rot0 = self.x.len() - self.lambda.len();
+        let (mut res, mut err) = (0.0, 0.0);
+        for (k, (&xk, &d)) in self.x.iter().zip(self.scale).enumerate() {
+            let g = self.enclosure.g[k];
+            let (mut r, mut e) = (g, self.enclosure.g_error[k] + 4.0 * U * g.norm());
+            if k >= rot0 {
+                let l = self.lambda[k - rot0];
+                r -= xk * (l - eta);
+                e += 4.0 * U * (l.abs() + eta.abs()) * xk.norm();
+            }
+            let v = r * d - xk * (sigma / d);
+            let ev = d * e + 4.0 * U * (sigma * xk.norm() / d + v.norm());
+            res += v.norm_sqr();
+            err += ev * ev;
+        }
+        let grow = 1.0 + gamma(self.x.len() + 4);
+        let eps2 = ((res.sqrt() + err.sqrt()) * grow).powi(2) / norm_lo * (1.0 + 4.0 * U);
+        if num_lo > 0.0 {
+            let rho_lo = num_lo / norm_hi * (1.0 - 2.0 * U);
+            // λ₁ ≥ ρ − ε²/(θ − ρ), increasing in ρ < θ: at ρ_lo, with θ − ρ_hi ≤ θ − ρ_lo.
+            if rho_lo * (theta - rho_hi) * (1.0 - 4.0 * U) >= eps2 {
+                return Ok(());
+            }
+        }
+        let rho = 2.0 * eps2 / theta;
+        if rho.is_nan() || rho >= 0.5 * theta {
+            return Err(None);
+        }
+        Err(Some(self.eta_for(rho * norm_hi)))
+    }
+
+    /// The smallest η ≤ `eta_max` found at which [`Self::check`] holds, searched upward from the
+    /// η that makes z*T(η)z vanish (λ raised by F/‖Y‖²), each step at least the η the residual
+    /// asks for and the steps doubling.
+    fn smallest_eta(&self, theta: f64, eta_max: f64) -> Option<f64> {
+        let mut eta = self.eta_for(0.0);
+        let mut step = (1e-6 * eta.abs()).max(f64::MIN_POSITIVE);
+        for _ in 0..64 {
+            if eta.is_nan() || eta > eta_max {
+                return None;
+            }
+            match self.check(theta, eta) {
+                Ok(()) => return Some(eta),
+                Err(None) => return None,
+                Err(Some(next)) => {
+                    eta = next.max(eta + step);
+                    step *= 2.0;
+                }
+            }
+        }
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3};
+    use crate::graph::{Edge, Pose2, PoseGraph, SymMat3};
     use crate::matrix::cost;
     use crate::weights::{Weights, edge_weights};
 
@@ -386,14 +728,7 @@ mod tests {
                 }
             })
             .collect();
-        let mut g = PoseGraph {
-            ids: (0..n as u32).collect(),
-            poses: vec![Pose2::IDENTITY; n],
-            edges,
-            fixed: vec![],
-            vertices_declared: true,
-            noise: NoiseKind::Information,
-        };
+        let mut g = PoseGraph::with_edges(vec![Pose2::IDENTITY; n], edges);
         g.initialize_spanning_tree();
         g
     }

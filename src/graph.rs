@@ -163,6 +163,19 @@ pub struct PoseGraph {
 }
 
 impl PoseGraph {
+    /// A graph built in code: poses with ids 0..n−1 and the given estimate, edges with
+    /// information matrices, no fixed poses (as if read from a g2o file with vertex lines).
+    pub fn with_edges(poses: Vec<Pose2>, edges: Vec<Edge>) -> Self {
+        PoseGraph {
+            ids: (0..poses.len() as VertexId).collect(),
+            poses,
+            edges,
+            fixed: Vec::new(),
+            vertices_declared: true,
+            noise: NoiseKind::Information,
+        }
+    }
+
     pub fn num_poses(&self) -> usize {
         self.ids.len()
     }

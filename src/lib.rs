@@ -35,6 +35,7 @@ pub mod matrix;
 pub mod nullspace;
 pub mod progress;
 pub mod refine;
+pub mod rounding;
 pub mod sdp;
 pub mod simulate;
 pub mod spectrum;

@@ -237,7 +237,7 @@ pub fn edge_cost(e: &Edge, w: EdgeWeight, poses: &[Pose2]) -> f64 {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::graph::{Edge, NoiseKind, SymMat3};
+    use crate::graph::{Edge, SymMat3};
     use crate::weights::{Weights, edge_weights};
 
     /// A small deterministic generator, so that the tests need no dependency.
@@ -284,14 +284,7 @@ pub(crate) mod tests {
                 }
             })
             .collect();
-        PoseGraph {
-            ids: (0..n as u32).collect(),
-            poses: truth.to_vec(),
-            edges,
-            fixed: vec![],
-            vertices_declared: true,
-            noise: NoiseKind::Information,
-        }
+        PoseGraph::with_edges(truth.to_vec(), edges)
     }
 
     pub(crate) fn random_poses(n: usize, rng: &mut Rng) -> Vec<Pose2> {

@@ -47,7 +47,7 @@
 //! closures (i, j), j > i + 1.
 
 use crate::error::Error;
-use crate::graph::{Edge, MAX_VERTEX_ID, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};
+use crate::graph::{Edge, MAX_VERTEX_ID, Pose2, PoseGraph, SymMat3};
 use std::f64::consts::{PI, TAU};
 use std::fmt;
 use std::str::FromStr;
@@ -221,14 +221,7 @@ pub fn simulate(config: &SimulationConfig) -> Simulated {
         .collect();
 
     Simulated {
-        graph: PoseGraph {
-            ids: (0..n).map(|k| k as VertexId).collect(),
-            poses: truth.clone(),
-            edges,
-            fixed: Vec::new(),
-            vertices_declared: true,
-            noise: NoiseKind::Information,
-        },
+        graph: PoseGraph::with_edges(truth.clone(), edges),
         truth,
     }
 }

@@ -241,7 +241,7 @@ pub fn certify_estimate(
             .sqrt();
     let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
     let resolution = certifier.resolution(&lambda, &x.x, 1);
-    let bound = certifier.certify(&lambda, &x.x, 1, reach);
+    let bound = certifier.certify(problem, &x, &lambda, reach);
     EstimateCertificate {
         cost,
         bound,
@@ -388,7 +388,7 @@ pub fn solve_from(
     // staircase.
     let resolution = certifier.resolution(&local.lambda, &local.point.x, 1);
     let reach = eta_max(local.cost).max(64.0 * resolution);
-    if let Some(bound) = certifier.certify(&local.lambda, &local.point.x, 1, reach) {
+    if let Some(bound) = certifier.certify(problem, &local.point, &local.lambda, reach) {
         return finish(
             local,
             Some(bound),
@@ -424,7 +424,7 @@ pub fn solve_from(
         }
         let resolution = certifier.resolution(&best.lambda, &best.point.x, 1);
         let reach = eta_max(best.cost).max(64.0 * resolution);
-        if let Some(bound) = certifier.certify(&best.lambda, &best.point.x, 1, reach) {
+        if let Some(bound) = certifier.certify(problem, &best.point, &best.lambda, reach) {
             return finish(
                 best,
                 Some(bound),
@@ -448,11 +448,11 @@ pub fn solve_from(
         let relaxed = optimize_to(problem, local.point.clone(), &tight, observer, 1e-12);
         iterations += relaxed.iterations;
         let eta_all = relaxed.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
-        bound = certifier.certify(&relaxed.lambda, &relaxed.point.x, rank, eta_all);
+        bound = certifier.certify(problem, &relaxed.point, &relaxed.lambda, eta_all);
         relaxed_lambda = Some(relaxed.lambda);
     }
     let eta_all = best.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
-    let own = certifier.certify(&best.lambda, &best.point.x, 1, eta_all);
+    let own = certifier.certify(problem, &best.point, &best.lambda, eta_all);
     let (bound, bound_lambda) = match (bound, own) {
         (Some(a), Some(b)) if a.lower_bound < b.lower_bound => (Some(b), None),
         (Some(a), _) => (Some(a), relaxed_lambda),
@@ -482,8 +482,11 @@ fn finish(
     options: &StaircaseOptions,
 ) -> StaircaseSolution {
     let lambda = bound_lambda.unwrap_or(&local.lambda);
-    let threshold = (16.0 * certifier.eigenvalue_resolution(lambda)).max(f64::MIN_POSITIVE);
-    let near_zero = certifier.count_below(lambda, threshold);
+    // A deflated proof counted them already; otherwise one LDLᴴ's inertia.
+    let near_zero = bound.and_then(|b| b.near_zero).or_else(|| {
+        let threshold = (16.0 * certifier.eigenvalue_resolution(lambda)).max(f64::MIN_POSITIVE);
+        certifier.count_below(lambda, threshold)
+    });
     let lower_bound = bound.map_or(0.0, |b| b.lower_bound.max(0.0));
     let certified =
         bound.is_some() && local.cost - lower_bound <= options.tolerance * local.cost.max(1.0);

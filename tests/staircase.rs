@@ -64,6 +64,83 @@ fn bounds_are_sound_and_tight_against_the_sdp_dual() {
 }
 
 #[test]
+fn the_deflated_certificate_is_tight_at_optima_and_sound_beside_them() {
+    // At a rank-1 optimum the proof isolates W̃(λ)'s one near-zero eigenvalue (inertia of an
+    // LDLᴴ) and bounds it by Temple's inequality, so the bound is within rounding of f*. Beside the
+    // optimum, the estimate's own multipliers can sum above f* (so a proof that ignored the
+    // residual would claim the impossible); the proven bound must stay ≤ f*, the optimum's cost.
+    let (mut above_optimum, mut deflated_beside) = (0, 0);
+    for seed in 0..8 {
+        let sim = simulate(&SimulationConfig {
+            n: 80,
+            seed,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.1 },
+            loop_probability: 0.1,
+            ..Default::default()
+        });
+        let g = &sim.graph;
+        let w = edge_weights(g, Weights::Unit).unwrap();
+        let (s, poses) = staircase(g, Weights::Unit);
+        let f_star = s.cost;
+        let bound = s.bound.expect("a certificate at the optimum");
+        assert!(
+            bound.gap.is_some(),
+            "seed {seed}: not the deflated proof: {s:?}"
+        );
+        assert!(
+            f_star - s.lower_bound <= 1e-9 * f_star && s.lower_bound <= f_star,
+            "seed {seed}: {} vs {f_star}: {s:?}",
+            s.lower_bound
+        );
+        let mut state = seed + 1;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for size in [1e-9, 1e-7, 1e-5, 1e-3, 1e-1] {
+            let moved: Vec<_> = poses
+                .iter()
+                .map(|p| {
+                    pgo::graph::Pose2::new(
+                        p.x + size * noise(),
+                        p.y + size * noise(),
+                        p.theta + size * noise(),
+                    )
+                })
+                .collect();
+            let c = pgo::staircase::certify_estimate(g, &w, &moved, f64::INFINITY);
+            if c.lambda.iter().sum::<f64>() > f_star {
+                above_optimum += 1;
+            }
+            if let Some(b) = c.bound {
+                if b.gap.is_some() && size >= 1e-7 {
+                    deflated_beside += 1;
+                }
+                assert!(
+                    b.lower_bound <= f_star,
+                    "seed {seed}, perturbation {size}: bound {} > f* {f_star}",
+                    b.lower_bound
+                );
+            }
+        }
+    }
+    assert!(
+        above_optimum > 0,
+        "no estimate tested whose naive bound Σλ exceeds f*"
+    );
+    assert!(
+        deflated_beside > 0,
+        "the deflated proof was never tried off the optimum"
+    );
+    eprintln!(
+        "{above_optimum} naive bounds above f*, {deflated_beside} deflated proofs off the optimum"
+    );
+}
+
+#[test]
 fn trees_are_certified_with_zero_cost() {
     // Prop. 1 / Prop. 11: a tree's optimum is 0 and λ = 0 certifies it.
     let sim = simulate(&SimulationConfig {

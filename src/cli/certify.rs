@@ -22,9 +22,11 @@ Exit status: 0 certified within --tol, 1 not certified (the bound printed still 
 /// Certify an estimate of a planar pose graph, or bound how far it is from optimal.
 ///
 /// The estimate's own Lagrange multipliers lambda (first-order conditions, eq. (33)) are tested:
-/// a sparse Cholesky factorization of W(lambda) + eta*blkdiag(0, I) that succeeds proves
-/// lambda - eta dual feasible, so sum(lambda) - n*eta is a lower bound on the optimum (weak
-/// duality (32)) and cost - lower_bound bounds the suboptimality. When that fails (the estimate
+/// a proof that W(lambda) + eta*blkdiag(0, I) is positive semidefinite (the inertia of one sparse
+/// LDL^H factorization isolates the estimate's near-zero eigenvalue and Temple's inequality
+/// bounds it, or else a sparse Cholesky factorization succeeds) makes lambda - eta dual feasible,
+/// so sum(lambda) - n*eta is a lower bound on the optimum (weak duality (32)) and
+/// cost - lower_bound bounds the suboptimality. When that fails (the estimate
 /// is not optimal, or not optimal enough for --tol), pgo-certify solves the problem itself and
 /// reports the lower bound that solution proves: the bound printed always holds.
 #[derive(Debug, Parser)]

@@ -27,7 +27,8 @@ Examples:
 /// eigenvalue property (SZEP) of the penalized pose graph matrix W(lambda*), its scaled null
 /// vector (Sec. 5.1) or the null-space method (46) (Sec. 5.2). Larger ones (--method staircase)
 /// run the scalable solver: chordal initialization, Riemannian Newton on |r_i| = 1, a sparse
-/// Cholesky certificate of W(lambda) + eta*blkdiag(0, I), and the Riemannian staircase when it
+/// certificate that W(lambda) + eta*blkdiag(0, I) is positive semidefinite (LDL^H inertia and
+/// Temple's inequality, or a Cholesky factorization), and the Riemannian staircase when it
 /// fails. The report gives the cost of the estimate, a proven lower bound on the optimum and
 /// their difference, which bounds the suboptimality; "certified" means that bound is within
 /// --tol. Each connected component is solved on its own.
