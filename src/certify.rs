@@ -28,7 +28,7 @@ use crate::manifold::{Enclosure, Point, Problem};
 use crate::matrix::PoseGraphMatrix;
 use crate::rounding::{U, gamma};
 use crate::spectrum::{hermitian_eigen, hermitian_eigenvalues};
-use faer::{Mat, c64};
+use faer::{Mat, c64, cx128, fx128};
 
 /// A proven lower bound on f* from a candidate λ.
 #[derive(Debug, Clone)]
@@ -165,6 +165,13 @@ pub struct SparseCertifier {
     pub factorizations: usize,
     /// The shift μ of the last successful [`Self::gap`], where the next one starts looking.
     last_mu: Option<f64>,
+    /// The fill-reducing order of the rows.
+    order: Vec<usize>,
+    /// Whether the last [`Self::certify_rank_one`] isolated one eigenvalue of W̃(λ) (whatever
+    /// Temple's inequality then made of it).
+    pub isolated: bool,
+    /// The pattern again in double-double, built on first need ([`Self::precise_gap`]).
+    precise: Option<(Assembly<cx128>, SparseFactor<cx128>)>,
 }
 
 /// The outcome of [`SparseCertifier::certify`].
@@ -180,8 +187,8 @@ pub struct SparseBound {
     /// the second smallest eigenvalue of D W̃(λ) D (equilibrated units), so W̃(λ) has exactly one
     /// eigenvalue below θ·min_k D_k⁻² (or none, when `eta` is 0 because W̃(λ) ≻ 0 was shown).
     pub gap: Option<f64>,
-    /// For a deflated proof: the number of eigenvalues of D W̃(λ) D below θ, proven (1, or 0 when
-    /// W̃(λ) ≻ 0 was shown outright).
+    /// 1 when a deflated proof isolated W̃(λ)'s one eigenvalue at zero (all others ≥ θ > 0, the
+    /// SZEP); `None` otherwise (count them by inertia at a threshold).
     pub near_zero: Option<usize>,
 }
 
@@ -206,6 +213,9 @@ impl SparseCertifier {
             values: Vec::with_capacity(upper.len()),
             factorizations: 0,
             last_mu: None,
+            order: order.to_vec(),
+            isolated: false,
+            precise: None,
         }
     }
 
@@ -317,14 +327,18 @@ impl SparseCertifier {
             return None;
         }
         let n = lambda.len();
+        self.isolated = false;
         let (_, scale) = self.scaling(lambda, 0.0, true)?;
         let gap = self.gap(problem, lambda, &scale)?;
+        self.isolated = matches!(gap, Gap::Isolated(_));
+        // Isolated: exactly one eigenvalue at zero is proven (the SZEP). Definite proves λ strictly
+        // feasible, which says nothing of how many eigenvalues lie within λ's accuracy of zero.
         let (eta, theta, near_zero) = match gap {
-            Gap::Definite(theta) => (0.0, theta, 0),
+            Gap::Definite(theta) => (0.0, theta, None),
             Gap::Isolated(theta) => {
                 let enclosure = problem.enclose(x);
                 let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
-                (rayleigh.smallest_eta(theta, eta_max)?, theta, 1)
+                (rayleigh.smallest_eta(theta, eta_max)?, theta, Some(1))
             }
         };
         if eta.is_nan() || eta > eta_max {
@@ -337,7 +351,7 @@ impl SparseCertifier {
             lower_bound: sum - n as f64 * eta - sum_error,
             alpha: 0.0,
             gap: Some(theta),
-            near_zero: Some(near_zero),
+            near_zero,
         })
     }
 
@@ -382,19 +396,79 @@ impl SparseCertifier {
                 let negative = self.factor.inertia_below(0.0);
                 if negative <= 1 {
                     let theta = mu - self.factor.ldlt_backward_error() - assembly - form;
-                    if theta.is_nan() || theta <= 0.0 {
-                        return None;
+                    if theta > 0.0 {
+                        self.last_mu = Some(mu);
+                        return Some(Gap::new(negative, theta));
                     }
-                    self.last_mu = Some(mu);
-                    return Some(if negative == 0 {
-                        Gap::Definite(theta)
-                    } else {
-                        Gap::Isolated(theta)
-                    });
+                    // Double precision's rounding hides the gap: the same shift in double-double.
+                    return self.precise_gap(lambda, scale, mu, assembly);
                 }
             }
             mu /= 64.0;
-            if mu < 1e3 * assembly {
+            if mu < 4.0 * assembly {
+                break;
+            }
+        }
+        None
+    }
+
+    /// [`Self::gap`] at shift `mu` (and at most two shifts 8 and 64 times smaller while more than
+    /// one pivot is negative) with the LDLᴴ in double-double arithmetic: the same proof, with a
+    /// backward error some 10¹⁵ times smaller, for graphs whose second eigenvalue lies below double
+    /// precision's resolution (long corridors: the bending modes of ais2klinik are ~1e-12 of
+    /// ‖D W̃ D‖). The stored W̃ is still double precision, so `assembly` stays.
+    fn precise_gap(
+        &mut self,
+        lambda: &[f64],
+        scale: &[f64],
+        mut mu: f64,
+        assembly: f64,
+    ) -> Option<Gap> {
+        let dim = self.diagonal.len();
+        let rot0 = dim - lambda.len();
+        let (precise, factor) = self.precise.get_or_insert_with(|| {
+            let pattern: Vec<(usize, usize)> =
+                self.entries.iter().map(|&(r, c, _)| (r, c)).collect();
+            let assembly = Assembly::<cx128>::new(dim, &pattern);
+            let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &self.order);
+            (assembly, factor)
+        });
+        let dd = |v: f64| fx128::from_f64(v);
+        let u = <cx128 as crate::factor::Scalar>::UNIT_ROUNDOFF;
+        let mut values = Vec::with_capacity(self.entries.len());
+        for _ in 0..3 {
+            let mut form = f64::MIN_POSITIVE;
+            values.clear();
+            for &(r, c, v) in &self.entries {
+                let s = scale[r] * scale[c];
+                values.push(if r == c {
+                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                    form = form.max(4.0 * u * ((v.re.abs() + l.abs()) * s + mu));
+                    cx128 {
+                        re: (dd(v.re) - dd(l)) * dd(s) - dd(mu),
+                        im: dd(0.0),
+                    }
+                } else {
+                    cx128 {
+                        re: dd(v.re * s),
+                        im: dd(v.im * s),
+                    }
+                });
+            }
+            precise.fill(&values);
+            self.factorizations += 1;
+            if factor.ldlt(precise.matrix.as_ref()).is_ok() {
+                let negative = factor.inertia_below(0.0);
+                if negative <= 1 {
+                    let theta = mu - factor.ldlt_backward_error() - assembly - form;
+                    return (theta > 0.0).then(|| {
+                        self.last_mu = Some(mu);
+                        Gap::new(negative, theta)
+                    });
+                }
+            }
+            mu /= 8.0;
+            if mu < 4.0 * assembly {
                 break;
             }
         }
@@ -525,6 +599,17 @@ enum Gap {
     Definite(f64),
     /// λ₂ ≥ θ > 0 and λ₁ < θ.
     Isolated(f64),
+}
+
+impl Gap {
+    /// From the number of negative pivots (0 or 1) of D W̃(λ) D − μI.
+    fn new(negative: usize, theta: f64) -> Self {
+        if negative == 0 {
+            Gap::Definite(theta)
+        } else {
+            Gap::Isolated(theta)
+        }
+    }
 }
 
 /// A bound on ‖D(W̃_stored − W̃)D‖₂, W̃ = Σ_e W̃_e the exact sum of the edges' terms (the matrix of
@@ -687,7 +772,10 @@ impl<'a> Rayleigh<'a> {
     /// η that makes z*T(η)z vanish (λ raised by F/‖Y‖²), each step at least the η the residual
     /// asks for and the steps doubling.
     fn smallest_eta(&self, theta: f64, eta_max: f64) -> Option<f64> {
-        let mut eta = self.eta_for(0.0);
+        // Not below −θ/(4·max D_a²): a larger negative η would eat the gap it relies on.
+        let mut eta = self
+            .eta_for(0.0)
+            .max(-0.25 * theta / (self.rotation_scale * (1.0 + 4.0 * U)));
         let mut step = (1e-6 * eta.abs()).max(f64::MIN_POSITIVE);
         for _ in 0..64 {
             if eta.is_nan() || eta > eta_max {

@@ -267,7 +267,7 @@ impl<T: Scalar> SparseFactor<T> {
         });
         let k = row_count.iter().copied().max().unwrap_or(1);
         let norm = rows.iter().fold(0.0f64, |m, &r| m.max(r));
-        2.0 * crate::rounding::gamma(4 * k + 16) * norm
+        2.0 * crate::rounding::gamma_with(T::UNIT_ROUNDOFF, 4 * k + 16) * norm
     }
 
     /// Inertia of the last LDLᴴ: the numbers of negative and of non-positive pivots.
@@ -328,6 +328,8 @@ pub trait Scalar:
     fn re(self) -> f64;
     /// The modulus.
     fn modulus(self) -> f64;
+    /// The unit roundoff of the arithmetic, for the error bounds of [`SparseFactor`].
+    const UNIT_ROUNDOFF: f64 = crate::rounding::U;
 }
 
 impl Scalar for f64 {
@@ -337,6 +339,20 @@ impl Scalar for f64 {
     fn modulus(self) -> f64 {
         self.abs()
     }
+}
+
+/// Double-double complex numbers (faer's `cx128`, ~32 significant digits), for factorizations
+/// whose backward error must lie far below double precision's. The error bounds take the unit
+/// roundoff as 32·u², generous for qd's double-double sums (componentwise within a few u² of
+/// |a| + |b|), products and quotients (within about 10·u²).
+impl Scalar for faer::cx128 {
+    fn re(self) -> f64 {
+        self.re.0 + self.re.1
+    }
+    fn modulus(self) -> f64 {
+        (self.re.0 * self.re.0 + self.im.0 * self.im.0).sqrt() * (1.0 + 4.0 * f64::EPSILON)
+    }
+    const UNIT_ROUNDOFF: f64 = 32.0 * crate::rounding::U * crate::rounding::U;
 }
 
 impl Scalar for faer::c64 {

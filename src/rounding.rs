@@ -9,7 +9,12 @@ pub const U: f64 = f64::EPSILON / 2.0;
 
 /// γ_k = k·u/(1 − k·u): the relative error of k successive roundings (∞ when k·u ≥ 1).
 pub fn gamma(k: usize) -> f64 {
-    let ku = k as f64 * U;
+    gamma_with(U, k)
+}
+
+/// γ_k for an arithmetic of unit roundoff `u` (e.g. double-double's).
+pub fn gamma_with(u: f64, k: usize) -> f64 {
+    let ku = k as f64 * u;
     if ku < 0.5 {
         ku / (1.0 - ku)
     } else {

@@ -150,7 +150,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 }
             }
         };
-        let near_zero = own.bound.and_then(|_| {
+        let near_zero = own.bound.and_then(|b| {
+            if b.near_zero.is_some() {
+                return b.near_zero;
+            }
             let threshold =
                 (16.0 * own.certifier.eigenvalue_resolution(&own.lambda)).max(f64::MIN_POSITIVE);
             own.certifier.count_below(&own.lambda, threshold)
