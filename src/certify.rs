@@ -23,7 +23,7 @@
 //! allowance, W̃(λ − s1) ⪰ 0 outright and the bound Σλ − n·s holds. The better of the two proven
 //! bounds is reported.
 
-use crate::factor::{Assembly, SparseFactor};
+use crate::factor::{Assembly, Layout, SparseFactor};
 use crate::manifold::{Enclosure, Point, Problem};
 use crate::matrix::PoseGraphMatrix;
 use crate::rounding::{U, gamma};
@@ -198,7 +198,7 @@ impl SparseCertifier {
     pub fn new(dim: usize, upper: &[(usize, usize, c64)], order: &[usize]) -> Self {
         let pattern: Vec<(usize, usize)> = upper.iter().map(|&(r, c, _)| (r, c)).collect();
         let assembly = Assembly::<c64>::new(dim, &pattern);
-        let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order);
+        let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
         let mut diagonal = vec![usize::MAX; dim];
         for (k, &(r, c, _)) in upper.iter().enumerate() {
             if r == c {
@@ -426,11 +426,21 @@ impl SparseCertifier {
     ) -> Option<Gap> {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
+        // Double-double runs column by column (faer's blocked kernels need SIMD support it lacks)
+        // at some 30x the cost of double precision: beyond ~10⁷ factor entries (320 MB, tens of
+        // seconds), no proof rather than an hour-long one.
+        if self.precise.is_none() && self.factor.stored_entries() > PRECISE_MAX_ENTRIES {
+            return None;
+        }
         let (precise, factor) = self.precise.get_or_insert_with(|| {
             let pattern: Vec<(usize, usize)> =
                 self.entries.iter().map(|&(r, c, _)| (r, c)).collect();
             let assembly = Assembly::<cx128>::new(dim, &pattern);
-            let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &self.order);
+            let factor = SparseFactor::analyze_ordered(
+                assembly.matrix.symbolic(),
+                &self.order,
+                Layout::Simplicial,
+            );
             (assembly, factor)
         });
         let dd = |v: f64| fx128::from_f64(v);
@@ -591,6 +601,10 @@ impl SparseCertifier {
         self.assembly.fill(&self.values);
     }
 }
+
+/// The largest factor (stored entries of the double-precision one) for which
+/// [`SparseCertifier::precise_gap`] runs its double-double LDLᴴ.
+const PRECISE_MAX_ENTRIES: usize = 10_000_000;
 
 /// What the inertia of [`SparseCertifier::gap`] proved about D W̃(λ) D.
 #[derive(Debug, Clone, Copy)]

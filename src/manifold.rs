@@ -475,8 +475,13 @@ impl NewtonSystem {
             .flat_map(|k| std::iter::repeat_n(poses[k], basis.len(k)))
             .collect();
         let order = crate::factor::group_ordering(&problem.pose_rank, &group);
-        let factor =
-            crate::factor::SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order);
+        // Supernodal: measured 1.6x (M3500c) to 2x (city10000) faster whole-process than faer's
+        // own choice (simplicial) on these patterns.
+        let factor = crate::factor::SparseFactor::analyze_ordered(
+            assembly.matrix.symbolic(),
+            &order,
+            crate::factor::Layout::Supernodal,
+        );
         NewtonSystem {
             assembly,
             values: Vec::with_capacity(pattern.len()),
