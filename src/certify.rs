@@ -364,45 +364,42 @@ impl SparseCertifier {
     /// the shift), or 64 times the last μ that worked, and is divided by 64 while more than one
     /// pivot is negative (at most 8 factorizations).
     fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
-        let dim = self.diagonal.len();
-        let rot0 = dim - lambda.len();
         let assembly = assembly_error(problem, scale);
         let mut mu = self
             .last_mu
             .map_or(1.0 / 16.0, |m| (64.0 * m).min(1.0 / 16.0));
+        // The last shift with more than one negative pivot, if any.
+        let mut above: Option<f64> = None;
         for _ in 0..8 {
-            let mut form = f64::MIN_POSITIVE;
-            self.values.clear();
-            for &(r, c, v) in &self.entries {
-                let s = scale[r] * scale[c];
-                self.values.push(if r == c {
-                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                    form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
-                    c64::new((v.re - l) * s - mu, 0.0)
-                } else {
-                    v * s
-                });
-            }
-            if self
-                .values
-                .iter()
-                .any(|v| !(v.re.is_finite() && v.im.is_finite()))
-            {
-                return None;
-            }
-            self.assembly.fill(&self.values);
-            self.factorizations += 1;
-            if self.factor.ldlt(self.assembly.matrix.as_ref()).is_ok() {
-                let negative = self.factor.inertia_below(0.0);
-                if negative <= 1 {
-                    let theta = mu - self.factor.ldlt_backward_error() - assembly - form;
+            match self.inertia_at(lambda, scale, mu)? {
+                Some((negative, error)) if negative <= 1 => {
+                    let theta = mu - error - assembly;
                     if theta > 0.0 {
                         self.last_mu = Some(mu);
                         return Some(Gap::new(negative, theta));
                     }
+                    // The rounding hides the gap at μ; λ₂ may lie well above μ (the shifts step
+                    // by 64): bisect (in log scale, three times) towards the shift above.
+                    if let Some(mut hi) = above {
+                        for _ in 0..3 {
+                            let mid = (mu * hi).sqrt();
+                            match self.inertia_at(lambda, scale, mid)? {
+                                Some((negative, error)) if negative <= 1 => {
+                                    let theta = mid - error - assembly;
+                                    if theta > 0.0 {
+                                        self.last_mu = Some(mid);
+                                        return Some(Gap::new(negative, theta));
+                                    }
+                                    mu = mid;
+                                }
+                                _ => hi = mid,
+                            }
+                        }
+                    }
                     // Double precision's rounding hides the gap: the same shift in double-double.
                     return self.precise_gap(lambda, scale, mu, assembly);
                 }
+                _ => above = Some(mu),
             }
             mu /= 64.0;
             if mu < 4.0 * assembly {
@@ -410,6 +407,45 @@ impl SparseCertifier {
             }
         }
         None
+    }
+
+    /// One LDLᴴ of D W̃(λ) D − μI in double precision: `Some((negative pivots, error))` with
+    /// `error` its backward error ([`SparseFactor::ldlt_backward_error`]) plus the rounding of
+    /// the shifted diagonal; `Some(None)` on a zero pivot; `None` if the scaled matrix is not
+    /// finite (then no shift will do).
+    fn inertia_at(
+        &mut self,
+        lambda: &[f64],
+        scale: &[f64],
+        mu: f64,
+    ) -> Option<Option<(usize, f64)>> {
+        let rot0 = self.diagonal.len() - lambda.len();
+        let mut form = f64::MIN_POSITIVE;
+        self.values.clear();
+        for &(r, c, v) in &self.entries {
+            let s = scale[r] * scale[c];
+            self.values.push(if r == c {
+                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
+                c64::new((v.re - l) * s - mu, 0.0)
+            } else {
+                v * s
+            });
+        }
+        if self
+            .values
+            .iter()
+            .any(|v| !(v.re.is_finite() && v.im.is_finite()))
+        {
+            return None;
+        }
+        self.assembly.fill(&self.values);
+        self.factorizations += 1;
+        if self.factor.ldlt(self.assembly.matrix.as_ref()).is_err() {
+            return Some(None);
+        }
+        let negative = self.factor.inertia_below(0.0);
+        Some(Some((negative, self.factor.ldlt_backward_error() + form)))
     }
 
     /// [`Self::gap`] at shift `mu` (and at most two shifts 8 and 64 times smaller while more than

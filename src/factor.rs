@@ -7,6 +7,7 @@
 //! (needed for inertia) nor the factor's columns (needed for negative-curvature directions), so
 //! both are read here from the numeric factor and its symbolic structure.
 
+use crate::rounding::gamma_with;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -263,13 +264,14 @@ impl<T: Scalar> SparseFactor<T> {
     }
 
     /// An a-posteriori bound on the backward error of the last LDLᴴ in the 2-norm: the computed
-    /// factors are the exact ones of A + ΔA with |ΔA| ≤ γ_c·|L||D||Lᴴ| entrywise (Higham,
+    /// factors are the exact ones of A + ΔA with |ΔA_ij| ≤ c_ij·u·(|L||D||Lᴴ|)_ij (Higham,
     /// *Accuracy and Stability of Numerical Algorithms*, Thm. 9.3, LU without pivoting with
-    /// U = DLᴴ). Each entry of A is reached by at most k products, k the largest number of entries
-    /// in a row of L; c = 4k + 16 covers complex arithmetic (√2γ₂ per product, Lemma 3.5), the
-    /// two products of each term and any order of summation (faer's supernodes sum blockwise).
-    /// As ‖ΔA‖₂ ≤ ‖|ΔA|‖_∞ for Hermitian ΔA, the bound is γ_c·max_i (|L|(|D|(|Lᴴ|·1)))_i, doubled
-    /// for the rounding of those sums: O(nnz(L)), no second factorization.
+    /// U = DLᴴ). Entry (i, j) sums k_ij ≤ k_i terms L_il d_l L̄_jl, k_i the entries of row i of
+    /// L: in complex arithmetic the sum is within √2·γ_{k_i} of Σ|terms| in modulus (any order,
+    /// so faer's blocked supernodes too), each product within √2γ₂ + u (Lemma 3.5), the division
+    /// by d_j within u, so c_ij ≤ 1.5·k_i + 6 and γ_{2k_i+8} covers it. As ‖ΔA‖₂ ≤ ‖|ΔA|‖_∞ for
+    /// Hermitian ΔA, the bound is max_i γ_{2k_i+8}·(|L|(|D|(|Lᴴ|·1)))_i, the row sums enlarged for
+    /// their own rounding: O(nnz(L)), no second factorization.
     pub fn ldlt_backward_error(&self) -> f64 {
         let dim = self.dim();
         let mut column = vec![1.0; dim];
@@ -290,9 +292,17 @@ impl<T: Scalar> SparseFactor<T> {
                 rows[i] += v.modulus() * scaled[j];
             }
         });
-        let k = row_count.iter().copied().max().unwrap_or(1);
-        let norm = rows.iter().fold(0.0f64, |m, &r| m.max(r));
-        2.0 * crate::rounding::gamma_with(T::UNIT_ROUNDOFF, 4 * k + 16) * norm
+        let (u, k_max) = (
+            T::UNIT_ROUNDOFF,
+            row_count.iter().copied().max().unwrap_or(1),
+        );
+        // The row sums of moduli are computed with relative error below γ_{2k+4} (and the
+        // moduli within 4 units of the double rounding).
+        let sums = 1.0 + gamma_with(crate::rounding::U, 2 * k_max + 4) + 4.0 * crate::rounding::U;
+        rows.iter()
+            .zip(&row_count)
+            .fold(0.0f64, |m, (&w, &k)| m.max(gamma_with(u, 2 * k + 8) * w))
+            * sums
     }
 
     /// Inertia of the last LDLᴴ: the numbers of negative and of non-positive pivots.
