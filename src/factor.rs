@@ -177,6 +177,32 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
+    /// Solves A X = B in place for a block of right-hand sides (the columns of `b`) with the
+    /// last successful factorization: one pass over the factor for all of them.
+    pub fn solve_block_in_place(&mut self, b: MatMut<'_, T>) {
+        assert_eq!(b.nrows(), self.dim());
+        let mut mem = MemBuffer::new(
+            self.symbolic
+                .solve_in_place_scratch::<T>(b.ncols(), Par::Seq),
+        );
+        let stack = MemStack::new(&mut mem);
+        match self.state {
+            State::Llt => LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                b,
+                Par::Seq,
+                stack,
+            ),
+            State::Ldlt => LdltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                b,
+                Par::Seq,
+                stack,
+            ),
+            State::None => panic!("solve without a successful factorization"),
+        }
+    }
+
     /// The pivots d_k of the last LDLᴴ (real parts), in the factorization's (permuted) order.
     pub fn ldlt_pivots(&self) -> Vec<f64> {
         assert_eq!(self.state, State::Ldlt);
