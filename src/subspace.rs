@@ -32,12 +32,17 @@
 //! with A itself (products with its stored entries, or a form Z ↦ Z*AZ the caller supplies,
 //! such as W̃ edge by edge), not with T, so that no cancellation against σ enters: by
 //! Courant-Fischer each is at least the eigenvalue of the same rank, and they equal the
-//! eigenvalues to rounding once the subspace has converged. Everything is sequential and the
-//! start block comes from a fixed seed, so the same input gives the same bits.
+//! eigenvalues to rounding once the subspace has converged. Everything is sequential (faer's
+//! dense kernels with `Par::Seq`: its default parallel products split their sums by thread
+//! count) and the start block comes from a fixed seed, so the same input gives the same bits.
 
 use crate::factor::{Assembly, NotFactorable, SparseFactor};
-use crate::spectrum::{hermitian_eigen, hermitian_eigenvalues};
-use faer::{Mat, c64};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
+use faer::linalg::householder;
+use faer::linalg::matmul::matmul;
+use faer::linalg::qr::no_pivoting::factor as qr;
+use faer::{Accum, Conj, Mat, MatRef, Par, c64};
 use std::ops::Range;
 
 /// The Hermitian pencil (A, B) of the module docs.
@@ -208,7 +213,7 @@ pub fn smallest_eigenvalues(
     let start = Mat::<c64>::from_fn(m, block, |_, _| {
         c64::new(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0)
     });
-    let mut x = start.qr().compute_thin_Q();
+    let mut x = orthonormal_basis(start);
     let floor = 16.0 * f64::EPSILON * norm;
     let mut estimates: Vec<f64> = Vec::new();
     let mut changes: Vec<f64> = Vec::new();
@@ -217,11 +222,13 @@ pub fn smallest_eigenvalues(
     while iterations < options.max_iterations {
         iterations += 1;
         let y = apply(&x).subrows(rows.start, m).to_owned();
-        let (mu, u) = hermitian_eigen(&hermitian_part(x.adjoint() * &y));
+        let Some((mu, u)) = eigh(&hermitian_part(product(x.adjoint(), y.as_ref()))) else {
+            break;
+        };
         // Descending μ: the smallest θ first.
         let u = Mat::from_fn(block, block, |i, j| u[(i, block - 1 - j)]);
         let next: Vec<f64> = (0..k).map(|j| 1.0 / mu[block - 1 - j] - sigma).collect();
-        x = (&y * &u).qr().compute_thin_Q();
+        x = orthonormal_basis(product(y.as_ref(), u.as_ref()));
         let change: Vec<f64> = if estimates.len() == k {
             next.iter()
                 .zip(&estimates)
@@ -255,33 +262,44 @@ pub fn smallest_eigenvalues(
     // B-norm, G = V diag(g) V*, C = diag(g)^{-1/2} V* H V diag(g)^{-1/2}.
     let z = apply(&x);
     let zr = z.subrows(rows.start, m);
-    let d: Vec<f64> = (0..block).map(|j| 1.0 / zr.col(j).norm_l2()).collect();
+    let d: Vec<f64> = (0..block)
+        .map(|j| {
+            let norm = zr.col(j).norm_l2();
+            if norm > 0.0 && norm.is_finite() {
+                1.0 / norm
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let scaled = Mat::from_fn(dim, block, |i, j| z[(i, j)] * d[j]);
-    let g = hermitian_part(scaled.subrows(rows.start, m).adjoint() * scaled.subrows(rows.start, m));
+    let zr = scaled.subrows(rows.start, m);
+    let g = hermitian_part(product(zr.adjoint(), zr));
     let h = hermitian_part(match form {
         Some(form) => form(&scaled),
-        None => scaled.adjoint() * upper_times(dim, upper, &scaled),
+        None => product(scaled.adjoint(), upper_times(dim, upper, &scaled).as_ref()),
     });
-    let (gv, gvec) = hermitian_eigen(&g);
-    let g_max = gv.last().copied().unwrap_or(0.0);
-    let keep: Vec<usize> = (0..block)
-        .filter(|&j| gv[j] > 1e-12 * g_max && gv[j].is_finite())
-        .collect();
-    let ritz = if keep.len() >= k {
+    let ritz = eigh(&g).and_then(|(gv, gvec)| {
+        let g_max = gv.last().copied().unwrap_or(0.0);
+        let keep: Vec<usize> = (0..block)
+            .filter(|&j| gv[j] > 1e-12 * g_max && gv[j].is_finite())
+            .collect();
+        if keep.len() < k {
+            return None;
+        }
         let s = Mat::from_fn(block, keep.len(), |i, j| {
             gvec[(i, keep[j])] / gv[keep[j]].sqrt()
         });
-        let c = hermitian_part(s.adjoint() * &h * &s);
-        hermitian_eigenvalues(&c)
-    } else {
-        Vec::new()
-    };
-    let values = if ritz.len() >= k && ritz.iter().all(|v| v.is_finite()) {
-        ritz[..k].to_vec()
-    } else {
-        let mut e = estimates;
-        e.sort_by(f64::total_cmp);
-        e
+        let c = product(s.adjoint(), product(h.as_ref(), s.as_ref()).as_ref());
+        eigh(&hermitian_part(c)).map(|(values, _)| values)
+    });
+    let values = match ritz {
+        Some(ritz) if ritz.iter().all(|v| v.is_finite()) => ritz[..k].to_vec(),
+        _ => {
+            let mut e = estimates;
+            e.sort_by(f64::total_cmp);
+            e
+        }
     };
     Ok(SmallestEigenvalues {
         values,
@@ -289,6 +307,84 @@ pub fn smallest_eigenvalues(
         converged,
         shift: sigma,
     })
+}
+
+/// A B, sequential.
+fn product(
+    a: MatRef<'_, impl faer::traits::Conjugate<Canonical = c64>>,
+    b: MatRef<'_, c64>,
+) -> Mat<c64> {
+    let mut out = Mat::<c64>::zeros(a.nrows(), b.ncols());
+    matmul(
+        out.as_mut(),
+        Accum::Replace,
+        a,
+        b,
+        c64::new(1.0, 0.0),
+        Par::Seq,
+    );
+    out
+}
+
+/// The first columns of Q of a = QR (a tall, full column rank), by Householder QR, sequential.
+fn orthonormal_basis(mut a: Mat<c64>) -> Mat<c64> {
+    let (m, n) = a.shape();
+    let block = qr::recommended_block_size::<c64>(m, n);
+    let mut coeff = Mat::<c64>::zeros(block, n);
+    qr::qr_in_place(
+        a.as_mut(),
+        coeff.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(qr::qr_in_place_scratch::<c64>(
+            m,
+            n,
+            block,
+            Par::Seq,
+            Default::default(),
+        ))),
+        Default::default(),
+    );
+    // The Householder vectors: the unit lower trapezoid of the factored a.
+    for j in 0..n {
+        for i in 0..j {
+            a[(i, j)] = c64::new(0.0, 0.0);
+        }
+        a[(j, j)] = c64::new(1.0, 0.0);
+    }
+    let mut q = Mat::<c64>::identity(m, n);
+    householder::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+        a.as_ref(),
+        coeff.as_ref(),
+        Conj::No,
+        q.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(
+            householder::apply_block_householder_sequence_on_the_left_in_place_scratch::<c64>(
+                m, block, n,
+            ),
+        )),
+    );
+    q
+}
+
+/// Eigenvalues (ascending) and eigenvectors of a small Hermitian matrix, sequential; `None` if
+/// the eigensolver fails (entries that are not finite).
+fn eigh(h: &Mat<c64>) -> Option<(Vec<f64>, Mat<c64>)> {
+    let n = h.nrows();
+    let mut s = faer::diag::Diag::<c64>::zeros(n);
+    let mut u = Mat::<c64>::zeros(n, n);
+    let scratch =
+        self_adjoint_evd_scratch::<c64>(n, ComputeEigenvectors::Yes, Par::Seq, Default::default());
+    self_adjoint_evd(
+        h.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .ok()?;
+    Some(((0..n).map(|k| s[k].re).collect(), u))
 }
 
 /// (H + H*)/2: exactly Hermitian, so that the dense eigensolver reads what it assumes.
@@ -317,6 +413,7 @@ fn upper_times(dim: usize, upper: &[(usize, usize, c64)], z: &Mat<c64>) -> Mat<c
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::spectrum::hermitian_eigenvalues;
     use faer::Side;
     use faer::prelude::Solve;
 
