@@ -1,7 +1,9 @@
 //! The sparse spectrum of `pgo-spectrum` at scale (`pgo::spectrum::sparse_spectra`, shift-invert
 //! subspace iteration on one sparse factorization per matrix) against dense eigenvalues of the
 //! same matrices, formed here from the dense blocks: W̃ (eq. (24)), W̃(λ) (Sec. 4.1) and
-//! M = Q − S* L⁻¹ S (eq. (38)).
+//! M = Q − S* L⁻¹ S (eq. (38)); and the tool on a public file above the dense limit.
+
+mod common;
 
 use faer::prelude::Solve;
 use faer::{Mat, Side, c64};
@@ -9,6 +11,7 @@ use pgo::matrix::PoseGraphMatrix;
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
 use pgo::spectrum::{hermitian_eigenvalues, scalable_spectrum, sparse_spectra};
 use pgo::weights::{Weights, edge_weights};
+use std::process::Command;
 
 /// M = Q − S* L⁻¹ S from the dense blocks of W̃, exactly Hermitian.
 fn dense_rotation_matrix(matrix: &PoseGraphMatrix) -> Mat<c64> {
@@ -97,4 +100,77 @@ fn sparse_eigenvalues_of_an_indefinite_penalized_matrix_match_the_dense_ones() {
     let dense = hermitian_eigenvalues(&matrix.penalized_dense(&raised));
     assert!(dense[0] < 0.0);
     assert_agree("W(λ + δ)", &sparse.penalized_eigenvalues, &dense, k);
+}
+
+#[test]
+fn pgo_spectrum_analyses_m3500_beyond_the_dense_limit() {
+    let path = common::datasets_dir().join("M3500.g2o");
+    let run = |threads: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pgo-spectrum"))
+            .arg(&path)
+            .args(["--json", "-k", "6"])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    let out = run("2");
+    // The same bytes whatever the thread count.
+    assert_eq!(out.stdout, run("1").stdout);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let list = |key: &str| -> Vec<f64> {
+        r[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(r["poses"], 3500);
+    assert_eq!(r["szep"], true);
+    assert_eq!(r["near_zero"], 1);
+    assert_eq!(r["balanced"], false);
+    assert_eq!(r["tree"], false);
+    let penalized = list("penalized_eigenvalues");
+    assert_eq!(penalized.len(), 6);
+    assert!(penalized.windows(2).all(|w| w[0] <= w[1]), "{penalized:?}");
+    // |μ₁| ≤ 1e-8·μ_max, checked against μ₆ ≤ μ_max.
+    assert!(penalized[0].abs() <= 1e-8 * penalized[5], "{penalized:?}");
+    assert!(penalized[1..].iter().all(|v| *v > 0.0), "{penalized:?}");
+    assert!(penalized[1] > 1e3 * penalized[0].abs(), "{penalized:?}");
+    let w = list("eigenvalues");
+    assert_eq!(w.len(), 6);
+    assert!(w[0] > 0.0, "M3500 is not balanced: {w:?}");
+    let m = list("rotation_eigenvalues");
+    assert_eq!(m.len(), 6);
+    assert!(m[0] > 0.0, "{m:?}");
+    assert_eq!(r["components"][0]["sdp_converged"], true);
+}
+
+#[test]
+fn pgo_spectrum_at_scale_prints_ten_by_default_and_refuses_more_than_a_hundred() {
+    let path = common::datasets_dir().join("M3500.g2o");
+    let tool = || Command::new(env!("CARGO_BIN_EXE_pgo-spectrum"));
+    let out = tool().arg(&path).arg("--json").output().unwrap();
+    assert!(out.status.success());
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "eigenvalues",
+        "penalized_eigenvalues",
+        "rotation_eigenvalues",
+    ] {
+        assert_eq!(r[key].as_array().unwrap().len(), 10, "{key}");
+        assert_eq!(r["components"][0][key].as_array().unwrap().len(), 10);
+    }
+    assert_eq!(r["components"][0]["lambda"].as_array().unwrap().len(), 3500);
+    let out = tool().arg(&path).args(["-k", "101"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("-k 101 is more than the 100"), "{stderr}");
+    assert!(out.stdout.is_empty());
 }
