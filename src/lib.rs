@@ -41,6 +41,7 @@ pub mod simulate;
 pub mod spectrum;
 pub mod staircase;
 pub mod stats;
+pub mod subspace;
 pub mod viz;
 pub mod weights;
 

@@ -161,6 +161,12 @@ impl Anchored {
         }
     }
 
+    /// Per-pose values of the anchored problem (such as λ) in the graph's indexing.
+    pub fn graph_order<T: Copy>(&self, internal: &[T]) -> Vec<T> {
+        let swap = swapper(self.anchor);
+        (0..internal.len()).map(|k| internal[swap(k)]).collect()
+    }
+
     /// Poses of a rank-1 state in the graph's indexing, moved rigidly so that the graph's pose 0
     /// is exactly `pose0` (f is invariant to that).
     pub fn poses(&self, x: &Point, pose0: Pose2) -> Vec<Pose2> {
@@ -192,14 +198,26 @@ pub fn solve_graph(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Vec<Pose2>)> {
+    let (solution, anchored) = solve_anchored(graph, weights, options, observer)?;
+    let poses = anchored.poses(&solution.point, graph.poses[0]);
+    Some((solution, poses))
+}
+
+/// As [`solve_graph`], with the anchored problem the solution's point and λ refer to (see
+/// [`Anchored::graph_order`]) instead of the poses.
+pub fn solve_anchored(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    options: &StaircaseOptions,
+    observer: &mut dyn FnMut(&Iteration),
+) -> Option<(StaircaseSolution, Anchored)> {
     // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
     // or its spanning-tree composition for edges-only files), so the problem is built once.
     let anchored = Anchored::centered(graph, weights, &graph.poses);
     let r = chordal_rotations(&anchored.problem)?;
     let start = with_optimal_positions(&anchored.problem, &r)?;
     let solution = solve_from(&anchored.problem, start, options, observer);
-    let poses = anchored.poses(&solution.point, graph.poses[0]);
-    Some((solution, poses))
+    Some((solution, anchored))
 }
 
 /// What the certificate establishes for a given estimate (pgo-certify).

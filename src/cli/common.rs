@@ -98,14 +98,16 @@ impl RerunArgs {
     }
 }
 
-/// Largest graph the dense (small-graph) computations accept.
+/// Largest graph (pgo-solve --method sdp) or component (pgo-spectrum) the dense SDP path of
+/// Algorithm 1 takes; pgo-spectrum analyses larger components sparse.
 pub const DENSE_MAX_POSES: usize = 2000;
 
-/// Refuses graphs too large for the dense computations, with a message saying so.
+/// Refuses graphs too large for the dense SDP path (`tool` names the tool and the flag that
+/// asked for it), with a message saying so and what to use instead.
 pub fn check_dense_size(graph: &PoseGraph, tool: &str) -> crate::Result<()> {
     if graph.num_poses() > DENSE_MAX_POSES {
         return Err(Error::Invalid(format!(
-            "{tool}: {} poses is more than the {DENSE_MAX_POSES} the dense SDP path handles; the scalable solver is not available yet",
+            "{tool}: {} poses is more than the {DENSE_MAX_POSES} the dense SDP path handles; --method auto or staircase solves it with the scalable solver",
             graph.num_poses()
         )));
     }

@@ -192,7 +192,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let read_s = t0.elapsed().as_secs_f64();
     rec.graph(&graph);
     if args.method == Method::Sdp {
-        check_dense_size(&graph, "pgo-solve")?;
+        check_dense_size(&graph, "pgo-solve --method sdp")?;
     }
     let policy = args.weights.weights;
     let t1 = Instant::now();

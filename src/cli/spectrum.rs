@@ -2,10 +2,11 @@
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
 use super::common::{
-    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
+    DENSE_MAX_POSES, InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout,
 };
 use crate::algorithm1::{SdpSolver, analyze};
-use crate::spectrum::hermitian_eigenvalues;
+use crate::error::Error;
+use crate::spectrum::{hermitian_eigenvalues, scalable_spectrum};
 use crate::weights::{Weights, edge_weights};
 use clap::Parser;
 use serde::Serialize;
@@ -26,6 +27,13 @@ Examples:
 /// as zero within 1000 times the accuracy of the dual solution (its duality gap, or the rounding
 /// of the eigenvalue computation if larger). Components are analysed one by one; the top-level
 /// lists merge theirs.
+///
+/// Components of more than 2000 poses are analysed sparse, without the SDP: lambda* are the
+/// multipliers of the scalable solver's estimate (pgo-solve's staircase), the zero count and the
+/// SZEP its certificate's (one eigenvalue at zero, proven, when the certificate isolates it),
+/// sdp_converged whether the certificate holds, and only the K smallest eigenvalues of each
+/// matrix are computed (10 with -k 0), with one sparse factorization per matrix and shift-invert
+/// subspace iteration (M is never formed).
 #[derive(Debug, Parser)]
 #[command(name = "pgo-spectrum", version, after_help = EXAMPLES)]
 pub struct Args {
@@ -35,11 +43,12 @@ pub struct Args {
     #[command(flatten)]
     pub weights: WeightArgs,
 
-    /// How many of the smallest eigenvalues to print (0: all)
+    /// How many of the smallest eigenvalues to print (0: all, but 10 for components of more
+    /// than 2000 poses, where at most 100 can be asked for)
     #[arg(short = 'k', long = "count", default_value = "0", value_name = "K")]
     pub count: usize,
 
-    /// SDP solver for the dual
+    /// SDP solver for the dual (components of at most 2000 poses)
     #[arg(long, value_enum, default_value = "ipm")]
     pub solver: SdpSolver,
 
@@ -69,7 +78,9 @@ pub struct ComponentSpectrum {
     pub lambda: Vec<f64>,
     /// The proven lower bound on f* (see pgo-solve).
     pub lower_bound: f64,
-    /// Whether the SDP solver reached its tolerance (see pgo-solve).
+    /// Whether the SDP solver reached its tolerance (see pgo-solve); for a component analysed
+    /// sparse (more than [`DENSE_MAX_POSES`] poses), whether the scalable solver's certificate
+    /// proved its estimate optimal (pgo-solve's `certified`).
     pub sdp_converged: bool,
 }
 
@@ -98,6 +109,14 @@ pub struct Report {
 /// Tolerance of the balanced test (metres and radians), Definition 1.
 const BALANCE_TOLERANCE: f64 = 1e-9;
 
+/// How many of the smallest eigenvalues `-k 0` prints for a component of more than
+/// [`DENSE_MAX_POSES`] poses, where not all are computed.
+pub const SPARSE_DEFAULT_COUNT: usize = 10;
+
+/// The most eigenvalues per matrix computed for a component of more than [`DENSE_MAX_POSES`]
+/// poses (each costs two solves per iteration of the subspace iteration).
+pub const SPARSE_MAX_COUNT: usize = 100;
+
 /// Entry point of the `pgo-spectrum` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
@@ -116,11 +135,48 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-spectrum")?;
     let (graph, _) = args.input.read()?;
     rec.graph(&graph);
-    check_dense_size(&graph, "pgo-spectrum")?;
     let policy = args.weights.weights;
+    let parts = graph.components();
+    let sparse = |part: &crate::graph::PoseGraph| part.num_poses() > DENSE_MAX_POSES;
+    let any_sparse = parts.iter().any(|(part, _, _)| sparse(part));
+    let sparse_count = match args.count {
+        0 => SPARSE_DEFAULT_COUNT,
+        k if k > SPARSE_MAX_COUNT && any_sparse => {
+            return Err(Error::Invalid(format!(
+                "-k {k} is more than the {SPARSE_MAX_COUNT} smallest eigenvalues computed for components of more than {DENSE_MAX_POSES} poses"
+            )));
+        }
+        k => k,
+    };
     let mut components = Vec::new();
-    for (part, _, _) in graph.components() {
+    for (part, _, _) in parts {
         let weights = edge_weights(&part, policy)?;
+        if sparse(&part) {
+            let s = scalable_spectrum(&part, &weights, sparse_count)?;
+            if !s.spectra.converged {
+                eprintln!(
+                    "pgo-spectrum: warning: the eigenvalue iteration of the component of pose {} did not converge; its eigenvalues are upper bounds",
+                    part.ids[0]
+                );
+            }
+            components.push(ComponentSpectrum {
+                first_id: part.ids[0],
+                poses: part.num_poses(),
+                edges: part.edges.len(),
+                eigenvalues: s.spectra.eigenvalues,
+                penalized_eigenvalues: s.spectra.penalized_eigenvalues,
+                rotation_eigenvalues: s.spectra.rotation_eigenvalues,
+                near_zero: s.near_zero,
+                szep: s.szep,
+                tree: part.is_forest(),
+                balanced: part.is_balanced(BALANCE_TOLERANCE),
+                dual_objective: s.dual_objective,
+                lambda: s.lambda,
+                lower_bound: s.lower_bound,
+                sdp_converged: s.certified,
+            });
+            continue;
+        }
         // In the units of the normalized weights, scaled back (see DualAnalysis).
         let a = analyze(&part, &weights, args.solver)?;
         let scaled = |v: Vec<f64>| -> Vec<f64> { v.into_iter().map(|x| x * a.scale).collect() };
@@ -142,13 +198,16 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             sdp_converged: a.dual.converged,
         });
     }
+    // The K smallest of each component hold the K smallest of the graph; with -k 0 and a
+    // component analysed sparse, its SPARSE_DEFAULT_COUNT are all the merged lists can hold.
+    let merged_count = if any_sparse { sparse_count } else { args.count };
     let merge = |f: fn(&ComponentSpectrum) -> &Vec<f64>| {
         smallest(
             components
                 .iter()
                 .flat_map(|c| f(c).iter().copied())
                 .collect(),
-            args.count,
+            merged_count,
         )
     };
     let report = Report {
