@@ -161,7 +161,11 @@ pub fn smallest_eigenvalues(
         .chain(rows.clone().map(|r| (r, r)))
         .collect();
     let mut assembly = Assembly::<c64>::new(dim, &pattern);
-    let mut factor = SparseFactor::<c64>::analyze_ordered(assembly.matrix.symbolic(), order);
+    let mut factor = SparseFactor::<c64>::analyze_ordered(
+        assembly.matrix.symbolic(),
+        order,
+        crate::factor::Layout::Auto,
+    );
     let mut sigma = 1e-12 * scale;
     let mut values: Vec<c64> = upper.iter().map(|&(_, _, v)| v).collect();
     values.extend(rows.clone().map(|_| c64::new(0.0, 0.0)));
