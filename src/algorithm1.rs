@@ -387,12 +387,17 @@ pub fn move_to_anchor(poses: &[Pose2], anchor: Pose2) -> Vec<Pose2> {
         moved[0] = at;
         moved
     };
+    place_or_origin(anchor, place)
+}
+
+/// `place(anchor)`, or, where positions would overflow next to the anchor's (near 1.8e308),
+/// `place` with pose 0 at the origin and the anchor's heading (f does not depend on where the
+/// estimate is).
+fn place_or_origin(anchor: Pose2, place: impl Fn(Pose2) -> Vec<Pose2>) -> Vec<Pose2> {
     let moved = place(anchor);
     if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
         return moved;
     }
-    // Positions that overflow next to the anchor's (near 1.8e308): pose 0 at the origin instead
-    // (f does not depend on where the estimate is).
     place(Pose2::new(0.0, 0.0, anchor.theta))
 }
 
@@ -414,11 +419,7 @@ pub fn spanning_tree_estimate(graph: &PoseGraph) -> Vec<Pose2> {
         moved[0] = at;
         moved
     };
-    let moved = place(anchor);
-    if moved.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
-        return moved;
-    }
-    place(Pose2::new(0.0, 0.0, anchor.theta))
+    place_or_origin(anchor, place)
 }
 
 /// The comparison roundings of Sec. 5.2 and Sec. 6 from a solved component: the eigenvector

@@ -181,8 +181,6 @@ pub struct SparseBound {
     pub eta: f64,
     /// Σλ − n·η, less the rounding of the sum: a lower bound on f*.
     pub lower_bound: f64,
-    /// The backward-error allowance α used (equilibrated units; 0 for a deflated proof).
-    pub alpha: f64,
     /// For a deflated proof ([`SparseCertifier::certify_rank_one`]): θ, a proven lower bound on
     /// the second smallest eigenvalue of D W̃(λ) D (equilibrated units), so W̃(λ) has exactly one
     /// eigenvalue below θ·min_k D_k⁻² (or none, when `eta` is 0 because W̃(λ) ≻ 0 was shown).
@@ -279,11 +277,10 @@ impl SparseCertifier {
         let mut attempts = 0;
         while eta <= eta_max && eta.is_finite() && attempts < 80 {
             attempts += 1;
-            if let Some(alpha) = self.try_eta(lambda, eta) {
+            if self.try_eta(lambda, eta) {
                 return Some(SparseBound {
                     eta,
                     lower_bound: dual_value(lambda, eta),
-                    alpha,
                     gap: None,
                     near_zero: None,
                 });
@@ -343,7 +340,6 @@ impl SparseCertifier {
         Some(SparseBound {
             eta,
             lower_bound: dual_value(lambda, eta),
-            alpha: 0.0,
             gap: Some(theta),
             near_zero,
         })
@@ -569,11 +565,13 @@ impl SparseCertifier {
         dim as f64 * (f64::EPSILON / 2.0) * norm
     }
 
-    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Returns α on success.
-    fn try_eta(&mut self, lambda: &[f64], eta: f64) -> Option<f64> {
+    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Whether it succeeded.
+    fn try_eta(&mut self, lambda: &[f64], eta: f64) -> bool {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
-        let (a, scale) = self.scaling(lambda, eta, false)?;
+        let Some((a, scale)) = self.scaling(lambda, eta, false) else {
+            return false;
+        };
         let base = self.alpha(&a, &scale);
         let mut alpha = base;
         // Plus the rounding of each a_kk itself (two additions), in equilibrated units.
@@ -593,10 +591,17 @@ impl SparseCertifier {
         }
         self.assembly.fill(&self.values);
         self.factorizations += 1;
-        self.factor
-            .llt(self.assembly.matrix.as_ref())
-            .ok()
-            .map(|_| alpha)
+        self.factor.llt(self.assembly.matrix.as_ref()).is_ok()
+    }
+
+    /// The eigenvalues of W̃(λ) at zero: the count a deflated proof established when `bound` is
+    /// one (1, the SZEP), else the inertia of W̃(λ) below 16 times their resolution
+    /// ([`Self::eigenvalue_resolution`]). `None` on a zero pivot.
+    pub fn near_zero(&mut self, bound: Option<&SparseBound>, lambda: &[f64]) -> Option<usize> {
+        bound.and_then(|b| b.near_zero).or_else(|| {
+            let threshold = (16.0 * self.eigenvalue_resolution(lambda)).max(f64::MIN_POSITIVE);
+            self.count_below(lambda, threshold)
+        })
     }
 
     /// The number of eigenvalues of W̃(λ) below `threshold` (Sylvester's law of inertia: the

@@ -24,15 +24,18 @@ pub const ZERO_FACTOR: f64 = 1e3;
 
 /// The absolute zero threshold for the eigenvalues of W̃(λ*) (see [`ZERO_FACTOR`]), given the
 /// duality gap the SDP solver reached.
+/// Summed over the stored entries column by column: the same sums as over the dense matrix.
 pub fn zero_threshold(matrix: &PoseGraphMatrix, duality_gap: f64) -> f64 {
-    let w = matrix.dense();
-    let d = w.nrows();
+    let d = matrix.dim();
     let mut max_diag = 1.0f64;
     let mut fro2 = 0.0;
     for c in 0..d {
-        max_diag = max_diag.max(w[(c, c)].re);
-        for r in 0..d {
-            fro2 += w[(r, c)].norm_sqr();
+        let rows = matrix.w.symbolic().row_idx_of_col_raw(c);
+        for (&r, v) in rows.iter().zip(matrix.w.val_of_col(c)) {
+            if r == c {
+                max_diag = max_diag.max(v.re);
+            }
+            fro2 += v.norm_sqr();
         }
     }
     let rounding = d as f64 * f64::EPSILON * fro2.sqrt();
@@ -217,7 +220,7 @@ pub fn scalable_spectrum(
     let spectra = sparse_spectra(graph, weights, &lambda, count)?;
     let near_zero = solution.near_zero.unwrap_or_else(|| {
         let gap = (solution.cost - solution.lower_bound).max(0.0);
-        let threshold = sparse_zero_threshold(&anchored.problem.upper, gap);
+        let threshold = zero_threshold(&anchored.problem.matrix, gap);
         near_zero(&spectra.penalized_eigenvalues, threshold)
     });
     Ok(ScalableSpectrum {
@@ -229,22 +232,4 @@ pub fn scalable_spectrum(
         near_zero,
         spectra,
     })
-}
-
-/// [`zero_threshold`] from W̃'s upper triangle: ZERO_FACTOR times the larger of `gap` and
-/// d·u·‖W̃‖_F, at least 1e-12 of the largest diagonal entry.
-fn sparse_zero_threshold(upper: &[(usize, usize, c64)], gap: f64) -> f64 {
-    let d = upper.iter().map(|&(_, c, _)| c + 1).max().unwrap_or(0);
-    let mut max_diag = 1.0f64;
-    let mut fro2 = 0.0;
-    for &(r, c, v) in upper {
-        if r == c {
-            max_diag = max_diag.max(v.re);
-            fro2 += v.norm_sqr();
-        } else {
-            fro2 += 2.0 * v.norm_sqr();
-        }
-    }
-    let rounding = d as f64 * f64::EPSILON * fro2.sqrt();
-    (ZERO_FACTOR * gap.abs().max(rounding)).max(1e-12 * max_diag)
 }

@@ -228,8 +228,6 @@ pub struct EstimateCertificate {
     pub bound: Option<SparseBound>,
     /// Norm of the Riemannian gradient at the estimate (0 at a critical point).
     pub gradient_norm: f64,
-    /// The certificate's resolution η_res at the estimate ([`SparseCertifier::resolution`]).
-    pub resolution: f64,
     pub lambda: Vec<f64>,
     pub certifier: SparseCertifier,
     pub anchored: Anchored,
@@ -258,13 +256,11 @@ pub fn certify_estimate(
             .sum::<f64>()
             .sqrt();
     let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
-    let resolution = certifier.resolution(&lambda, &x.x, 1);
     let bound = certifier.certify(problem, &x, &lambda, reach);
     EstimateCertificate {
         cost,
         bound,
         gradient_norm,
-        resolution,
         lambda,
         certifier,
         anchored,
@@ -396,34 +392,35 @@ pub fn optimize_to(
 pub fn polish(problem: &Problem, local: Local) -> Local {
     let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
     let mut local = local;
-    let basis = TangentBasis::new(problem, &local.point);
+    // The basis and gradient at the current point, carried from one step to the next.
+    let mut basis = TangentBasis::new(problem, &local.point);
+    let mut grad = basis.coordinates(&problem.half_gradient(&local.point));
     let mut system = NewtonSystem::new(problem, &basis);
     for _ in 0..4 {
-        let basis = TangentBasis::new(problem, &local.point);
-        let g = problem.half_gradient(&local.point);
-        let grad: Vec<f64> = basis.coordinates(&g).iter().map(|v| 2.0 * v).collect();
         system.update(problem, &basis, &local.lambda, 1e-10);
         if system.factor.llt(system.assembly.matrix.as_ref()).is_err() {
             break;
         }
-        let mut delta: Vec<f64> = grad.iter().map(|v| -v).collect();
+        // (H + μD)δ = −2Bᵀg: the Riemannian gradient is twice the half gradient's coordinates.
+        let mut delta: Vec<f64> = grad.iter().map(|v| -2.0 * v).collect();
         system.factor.solve_in_place(&mut delta);
         let trial = basis.retract(&local.point, &delta, problem.n);
         let cost = problem.cost(&trial);
         let g_trial = problem.half_gradient(&trial);
         let basis_trial = TangentBasis::new(problem, &trial);
-        let gradient_norm = 2.0 * norm(&basis_trial.coordinates(&g_trial));
-        if !(gradient_norm < 0.5 * norm(&grad) && cost <= local.cost * (1.0 + 1e-12)) {
+        let grad_trial = basis_trial.coordinates(&g_trial);
+        if !(norm(&grad_trial) < 0.5 * norm(&grad) && cost <= local.cost * (1.0 + 1e-12)) {
             break;
         }
         local = Local {
             lambda: problem.multipliers(&trial, &g_trial),
             point: trial,
             cost,
-            gradient_norm,
+            gradient_norm: 2.0 * norm(&grad_trial),
             iterations: local.iterations + 1,
             converged: local.converged,
         };
+        (basis, grad) = (basis_trial, grad_trial);
     }
     local
 }
@@ -440,13 +437,17 @@ pub fn solve_from(
     let mut local = optimize(problem, start, options, observer);
     let mut iterations = local.iterations;
     let eta_max = |cost: f64| options.tolerance * cost.max(1.0) / n as f64;
+    // How far to search η at a rank-1 estimate: the tolerance, or 64 times the shifted
+    // factorization's resolution there, whichever is larger.
+    let reach = |certifier: &SparseCertifier, l: &Local| {
+        eta_max(l.cost).max(64.0 * certifier.resolution(&l.lambda, &l.point.x, 1))
+    };
     // Rank 1 first: the common case. A proof within 64x the certificate's resolution means the
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
     // negative eigenvalue of W̃(λ): a saddle, or a relaxation that is not exact) calls for the
     // staircase.
-    let resolution = certifier.resolution(&local.lambda, &local.point.x, 1);
-    let reach = eta_max(local.cost).max(64.0 * resolution);
-    let mut first = certifier.certify(problem, &local.point, &local.lambda, reach);
+    let reach_1 = reach(&certifier, &local);
+    let mut first = certifier.certify(problem, &local.point, &local.lambda, reach_1);
     if certifier.isolated
         && first
             .is_none_or(|b| local.cost - b.lower_bound > options.tolerance * local.cost.max(1.0))
@@ -458,7 +459,7 @@ pub fn solve_from(
         if local.iterations > before {
             iterations += local.iterations - before;
             first = certifier
-                .certify(problem, &local.point, &local.lambda, reach)
+                .certify(problem, &local.point, &local.lambda, reach_1)
                 .or(first);
         }
     }
@@ -496,9 +497,8 @@ pub fn solve_from(
         if polished.cost < best.cost {
             best = polished;
         }
-        let resolution = certifier.resolution(&best.lambda, &best.point.x, 1);
-        let reach = eta_max(best.cost).max(64.0 * resolution);
-        if let Some(bound) = certifier.certify(problem, &best.point, &best.lambda, reach) {
+        let reach_p = reach(&certifier, &best);
+        if let Some(bound) = certifier.certify(problem, &best.point, &best.lambda, reach_p) {
             return finish(
                 best,
                 Some(bound),
@@ -558,11 +558,7 @@ fn finish(
     options: &StaircaseOptions,
 ) -> StaircaseSolution {
     let lambda = count_lambda.unwrap_or(&local.lambda);
-    // A deflated proof counted them already; otherwise one LDLᴴ's inertia.
-    let near_zero = bound.and_then(|b| b.near_zero).or_else(|| {
-        let threshold = (16.0 * certifier.eigenvalue_resolution(lambda)).max(f64::MIN_POSITIVE);
-        certifier.count_below(lambda, threshold)
-    });
+    let near_zero = certifier.near_zero(bound.as_ref(), lambda);
     let lower_bound = bound.map_or(0.0, |b| b.lower_bound.max(0.0));
     let certified =
         bound.is_some() && local.cost - lower_bound <= options.tolerance * local.cost.max(1.0);

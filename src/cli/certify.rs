@@ -44,7 +44,7 @@ pub struct Args {
     pub weights: WeightArgs,
 
     /// Relative suboptimality bound under which the estimate is called certified
-    #[arg(long, default_value = "1e-6", value_name = "REL")]
+    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance)]
     pub tol: f64,
 
     /// Print the report as one JSON object on stdout
@@ -99,9 +99,6 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
-    if !(args.tol >= 0.0 && args.tol.is_finite()) {
-        return Err(Error::Invalid("--tol must be a finite number >= 0".into()));
-    }
     let rec = args.rerun.recorder("pgo-certify")?;
     let (graph, _) = args.input.read()?;
     let poses = match &args.estimate {
@@ -150,14 +147,9 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 }
             }
         };
-        let near_zero = own.bound.and_then(|b| {
-            if b.near_zero.is_some() {
-                return b.near_zero;
-            }
-            let threshold =
-                (16.0 * own.certifier.eigenvalue_resolution(&own.lambda)).max(f64::MIN_POSITIVE);
-            own.certifier.count_below(&own.lambda, threshold)
-        });
+        let near_zero = own
+            .bound
+            .and_then(|b| own.certifier.near_zero(Some(&b), &own.lambda));
         let suboptimality_bound = cost - lower_bound;
         components.push(ComponentReport {
             first_id: part.ids[0],

@@ -114,6 +114,16 @@ pub fn check_dense_size(graph: &PoseGraph, tool: &str) -> crate::Result<()> {
     Ok(())
 }
 
+/// The value of `--tol` (pgo-solve, pgo-certify): a relative suboptimality, finite and ≥ 0.
+pub fn parse_tolerance(s: &str) -> Result<f64, String> {
+    let t: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if t.is_finite() && t >= 0.0 {
+        Ok(t)
+    } else {
+        Err(format!("--tol must be a finite number >= 0, found {s}"))
+    }
+}
+
 /// Serializes a report as one line of JSON.
 pub fn to_json_line<T: serde::Serialize>(value: &T) -> crate::Result<String> {
     let mut s = serde_json::to_string(value)

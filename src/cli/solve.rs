@@ -58,7 +58,7 @@ pub struct Args {
     pub solver: SdpSolver,
 
     /// Relative suboptimality bound under which the result is called certified
-    #[arg(long, default_value = "1e-6", value_name = "REL")]
+    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance)]
     pub tol: f64,
 
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
@@ -183,9 +183,6 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
-    if !(args.tol >= 0.0 && args.tol.is_finite()) {
-        return Err(Error::Invalid("--tol must be a finite number >= 0".into()));
-    }
     let rec = args.rerun.recorder("pgo-solve")?;
     let t0 = Instant::now();
     let (mut graph, read_report) = args.input.read()?;
