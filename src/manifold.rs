@@ -123,6 +123,14 @@ impl Problem {
         crate::factor::group_ordering(&self.pose_rank, &self.row_poses())
     }
 
+    /// A fill-reducing order of poses 1..n−1 (the rows of the anchored Laplacian L and of the
+    /// chordal relaxation: [`crate::factor::group_ordering`] by [`Problem::pose_rank`]), so that
+    /// their factorizations need no ordering of their own.
+    pub fn anchored_order(&self) -> Vec<usize> {
+        let poses: Vec<usize> = (1..self.n).collect();
+        crate::factor::group_ordering(&self.pose_rank, &poses)
+    }
+
     /// The dimension 2n − 1 (rows of X).
     pub fn rows(&self) -> usize {
         2 * self.n - 1
@@ -459,16 +467,19 @@ fn sphere_basis(y: &[c64], out: &mut Vec<c64>) {
 
 /// The Newton system's sparse matrix for a fixed rank and pattern.
 pub struct NewtonSystem {
+    /// H + μD in the factor's elimination order, lower triangle.
     pub assembly: Assembly<f64>,
     values: Vec<f64>,
     /// The factorization, analyzed once for the pattern (shared by every iterate of a rank).
     pub factor: crate::factor::SparseFactor<f64>,
+    /// The elimination order: `order[new] = old` coordinate.
+    order: Vec<usize>,
+    permuted: Vec<f64>,
 }
 
 impl NewtonSystem {
     pub fn new(problem: &Problem, basis: &TangentBasis) -> Self {
         let pattern = basis.hessian_pattern(problem);
-        let assembly = Assembly::new(basis.dim, &pattern);
         // Coordinates grouped by pose, poses in the problem's fill-reducing order.
         let poses = problem.row_poses();
         let group: Vec<usize> = (0..poses.len())
@@ -476,16 +487,20 @@ impl NewtonSystem {
             .collect();
         let order = crate::factor::group_ordering(&problem.pose_rank, &group);
         // Supernodal: measured 1.6x (M3500c) to 2x (city10000) faster whole-process than faer's
-        // own choice (simplicial) on these patterns.
-        let factor = crate::factor::SparseFactor::analyze_ordered(
+        // own choice (simplicial) on these patterns. Assembled directly in its order and triangle.
+        let layout = crate::factor::Layout::Supernodal;
+        let assembly = Assembly::permuted(basis.dim, &pattern, &order, layout.stored_side());
+        let factor = crate::factor::SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
-            &order,
-            crate::factor::Layout::Supernodal,
+            layout.stored_side(),
+            layout,
         );
         NewtonSystem {
             assembly,
             values: Vec::with_capacity(pattern.len()),
             factor,
+            permuted: vec![0.0; order.len()],
+            order,
         }
     }
 
@@ -493,6 +508,23 @@ impl NewtonSystem {
     pub fn update(&mut self, problem: &Problem, basis: &TangentBasis, lambda: &[f64], mu: f64) {
         basis.hessian_values(problem, lambda, mu, &mut self.values);
         self.assembly.fill(&self.values);
+    }
+
+    /// Numeric LLᵀ of the last [`NewtonSystem::update`]; `Err` if H + μD is not numerically
+    /// positive definite.
+    pub fn factorize(&mut self) -> Result<(), crate::factor::NotFactorable> {
+        self.factor.llt(self.assembly.matrix.as_ref())
+    }
+
+    /// Solves (H + μD) δ = b in place with the last successful [`NewtonSystem::factorize`].
+    pub fn solve_in_place(&mut self, b: &mut [f64]) {
+        for (p, &old) in self.permuted.iter_mut().zip(&self.order) {
+            *p = b[old];
+        }
+        self.factor.solve_in_place(&mut self.permuted);
+        for (p, &old) in self.permuted.iter().zip(&self.order) {
+            b[old] = *p;
+        }
     }
 }
 
