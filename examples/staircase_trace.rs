@@ -29,17 +29,47 @@ fn main() {
                 continue;
             }
         };
-        let t = Instant::now();
+        // Setup phases, medians of 15 runs each.
+        let median = |f: &mut dyn FnMut()| {
+            let mut times: Vec<f64> = (0..15)
+                .map(|_| {
+                    let t = Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64()
+                })
+                .collect();
+            times.sort_by(f64::total_cmp);
+            times[7]
+        };
         let anchored = pgo::staircase::Anchored::centered(&g, &weights, &g.poses);
-        let t_problem = t.elapsed().as_secs_f64();
-        let r = pgo::init::chordal_rotations(&anchored.problem).expect("connected");
-        let t_chordal = t.elapsed().as_secs_f64();
-        let _ = pgo::init::with_optimal_positions(&anchored.problem, &r).expect("connected");
-        let t_positions = t.elapsed().as_secs_f64();
+        let problem = &anchored.problem;
+        let r = pgo::init::chordal_rotations(problem).expect("connected");
+        let x = pgo::init::with_optimal_positions(problem, &r).expect("connected");
+        let basis = pgo::manifold::TangentBasis::new(problem, &x);
         println!(
-            "problem {t_problem:.4} chordal {:.4} positions {:.4}",
-            t_chordal - t_problem,
-            t_positions - t_chordal
+            "setup medians: matrix {:.4} problem {:.4} chordal {:.4} positions {:.4} certifier {:.4} newton system {:.4}",
+            median(&mut || {
+                std::hint::black_box(pgo::matrix::PoseGraphMatrix::new(&g, &weights));
+            }),
+            median(&mut || {
+                std::hint::black_box(pgo::staircase::Anchored::centered(&g, &weights, &g.poses));
+            }),
+            median(&mut || {
+                std::hint::black_box(pgo::init::chordal_rotations(problem));
+            }),
+            median(&mut || {
+                std::hint::black_box(pgo::init::OptimalPositions::new(problem));
+            }),
+            median(&mut || {
+                std::hint::black_box(pgo::certify::SparseCertifier::new(
+                    problem.rows(),
+                    &problem.upper,
+                    &problem.row_order(),
+                ));
+            }),
+            median(&mut || {
+                std::hint::black_box(pgo::manifold::NewtonSystem::new(problem, &basis));
+            }),
         );
         let t = Instant::now();
         let mut trace = |it: &pgo::staircase::Iteration| {

@@ -16,7 +16,7 @@ use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
 };
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
@@ -561,22 +561,44 @@ impl<T: Scalar> Assembly<T> {
         Self::from_entries(dim, entries)
     }
 
+    /// The compressed-column pattern of `entries` (duplicates merged, rows sorted) by a
+    /// counting sort on the columns, O(nnz + dim), and each entry's slot in it. Hand-written:
+    /// faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve 3-5% faster on
+    /// M3500, intel and city10000 (medians of 21 interleaved runs). (For W̃ itself, 87 000
+    /// duplicated entries on M3500, faer's builder stayed faster: its fewer allocations.)
     fn from_entries(dim: usize, entries: Vec<(usize, usize)>) -> Self {
-        let triplets: Vec<Triplet<usize, usize, T>> = entries
-            .iter()
-            .map(|&(r, c)| Triplet::new(r, c, T::zero_impl()))
-            .collect();
-        let matrix = SparseColMat::try_new_from_triplets(dim, dim, &triplets)
-            .expect("entries are within the matrix");
-        let sym = matrix.symbolic();
-        let slots = entries
-            .iter()
-            .map(|&(r, c)| {
-                let start = sym.col_ptr()[c];
-                let rows = sym.row_idx_of_col_raw(c);
-                start + rows.binary_search(&r).expect("the entry is in the pattern")
-            })
-            .collect();
+        let mut start = vec![0usize; dim + 1];
+        for &(_, c) in &entries {
+            start[c + 1] += 1;
+        }
+        for c in 0..dim {
+            start[c + 1] += start[c];
+        }
+        // (row, entry index) bucketed by column, then sorted within each column.
+        let mut by_column = vec![(0usize, 0usize); entries.len()];
+        let mut next = start.clone();
+        for (k, &(r, c)) in entries.iter().enumerate() {
+            by_column[next[c]] = (r, k);
+            next[c] += 1;
+        }
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        let mut row_idx = Vec::with_capacity(entries.len());
+        let mut slots = vec![0usize; entries.len()];
+        col_ptr.push(0);
+        for c in 0..dim {
+            let bucket = &mut by_column[start[c]..start[c + 1]];
+            bucket.sort_unstable();
+            for &(r, k) in bucket.iter() {
+                if row_idx.len() == col_ptr[c] || row_idx.last() != Some(&r) {
+                    row_idx.push(r);
+                }
+                slots[k] = row_idx.len() - 1;
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let nnz = row_idx.len();
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
+        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
         Assembly { matrix, slots }
     }
 
@@ -635,6 +657,7 @@ pub fn group_ordering(rank: &[usize], group: &[usize]) -> Vec<usize> {
 mod tests {
     use super::*;
     use faer::c64;
+    use faer::sparse::Triplet;
 
     /// The tridiagonal Hermitian matrix with diagonal `d` and off-diagonal `e` (i on the
     /// superdiagonal), factored by LDLᴴ in both layouts; returns the backward-error bounds and
@@ -719,6 +742,56 @@ mod tests {
         // Some 10¹⁵ times below double precision's bound for the same factors.
         let bound = f.ldlt_backward_error();
         assert!(bound > 0.0 && bound < 1e-25, "{bound}");
+    }
+
+    /// The counting-sort assembly agrees with faer's own triplet builder (an independent
+    /// construction): same pattern, duplicates summed, for the plain and the permuted (lower
+    /// triangle) forms.
+    #[test]
+    fn assembly_matches_faers_triplet_builder() {
+        let dim = 37;
+        let mut entries = Vec::new();
+        let mut values = Vec::new();
+        for k in 0..400usize {
+            let (a, b) = ((k * 7919) % dim, (k * 104729 + k / 3) % dim);
+            entries.push((a.min(b), a.max(b)));
+            values.push(1.0 + (k % 13) as f64 / 8.0);
+        }
+        for k in 0..dim {
+            entries.push((k, k));
+            values.push(0.5);
+        }
+        let order: Vec<usize> = (0..dim).map(|k| (k * 11) % dim).collect();
+        let mut new = vec![0; dim];
+        for (i, &old) in order.iter().enumerate() {
+            new[old] = i;
+        }
+        for side in [None, Some(Side::Lower), Some(Side::Upper)] {
+            let mut assembly = match side {
+                None => Assembly::<f64>::new(dim, &entries),
+                Some(s) => Assembly::permuted(dim, &entries, &order, s),
+            };
+            assembly.fill(&values);
+            let place = |(r, c): (usize, usize)| match side {
+                None => (r, c),
+                Some(Side::Lower) => (new[r].max(new[c]), new[r].min(new[c])),
+                Some(Side::Upper) => (new[r].min(new[c]), new[r].max(new[c])),
+            };
+            let triplets: Vec<Triplet<usize, usize, f64>> = entries
+                .iter()
+                .zip(&values)
+                .map(|(&e, &v)| {
+                    let (r, c) = place(e);
+                    Triplet::new(r, c, v)
+                })
+                .collect();
+            let reference = SparseColMat::try_new_from_triplets(dim, dim, &triplets).unwrap();
+            assert_eq!(assembly.matrix.col_ptr(), reference.col_ptr(), "{side:?}");
+            assert_eq!(assembly.matrix.row_idx(), reference.row_idx(), "{side:?}");
+            for (a, b) in assembly.matrix.val().iter().zip(reference.val()) {
+                assert!((a - b).abs() <= 1e-12 * b.abs(), "{side:?}: {a} vs {b}");
+            }
+        }
     }
 
     #[test]
