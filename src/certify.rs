@@ -397,10 +397,9 @@ impl SparseCertifier {
                     // rung without passing λ₂ (one factorization fewer on every public file of
                     // 800 poses or more).
                     let many = matches!(other, Some((negative, _)) if negative >= 100);
-                    mu /= if many { 64.0 } else { 1.0 };
+                    mu /= if many { 4096.0 } else { 64.0 };
                 }
             }
-            mu /= 64.0;
             if mu < 4.0 * assembly {
                 break;
             }

@@ -14,7 +14,7 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
+    SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
@@ -290,25 +290,8 @@ impl<T: Scalar> SparseFactor<T> {
 
     /// The pivots d_k of the last LDLᴴ (real parts), in the factorization's (permuted) order.
     pub fn ldlt_pivots(&self) -> Vec<f64> {
-        assert_eq!(self.state, State::Ldlt);
         let mut d = vec![0.0; self.dim()];
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                for (j, dj) in d.iter_mut().enumerate() {
-                    *dj = self.values[s.col_ptr()[j]].re();
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let factor = supernodal::SupernodalLdltRef::new(s, &self.values);
-                for k in 0..s.n_supernodes() {
-                    let node = factor.supernode(k);
-                    let val = node.val();
-                    for c in 0..val.ncols() {
-                        d[node.start() + c] = val[(c, c)].re();
-                    }
-                }
-            }
-        }
+        self.visit_ldlt_columns(|j, _, first| d[j] = self.values[first].re());
         d
     }
 
@@ -513,8 +496,10 @@ impl Scalar for faer::c64 {
         for s in m.iter_mut() {
             *s = s.sqrt();
         }
+        // Where the square underflowed or overflowed (and at zeros): the careful modulus.
+        let smallest = f64::MIN_POSITIVE.sqrt();
         for (m, v) in m.iter_mut().zip(values) {
-            if !(*m >= 1.5e-154 && m.is_finite()) {
+            if !(*m >= smallest && m.is_finite()) {
                 *m = v.modulus();
             }
         }

@@ -56,14 +56,7 @@ pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
             (None, None) => {}
         }
     }
-    let mut assembly = Assembly::<c64>::new(n - 1, &entries);
-    assembly.fill(&values);
-    let mut factor = SparseFactor::analyze_ordered(
-        assembly.matrix.symbolic(),
-        &problem.anchored_order(),
-        Layout::Auto,
-    );
-    factor.llt(assembly.matrix.as_ref()).ok()?;
+    let mut factor = anchored_llt(problem, &entries, &values)?;
     factor.solve_in_place(&mut rhs);
     Some(
         std::iter::once(one)
@@ -73,6 +66,27 @@ pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
             }))
             .collect(),
     )
+}
+
+/// The LLᴴ of a Hermitian matrix on the rows of poses 1..n−1 (upper-triangle entries, duplicates
+/// summed), in the problem's fill-reducing pose order. `None` if it is not numerically positive
+/// definite.
+fn anchored_llt(
+    problem: &Problem,
+    entries: &[(usize, usize)],
+    values: &[c64],
+) -> Option<SparseFactor<c64>> {
+    let mut assembly = Assembly::<c64>::new(problem.n - 1, entries);
+    assembly.fill(values);
+    let mut factor = SparseFactor::analyze_ordered(
+        assembly.matrix.symbolic(),
+        &problem.anchored_order(),
+        Layout::Auto,
+    );
+    if problem.n > 1 {
+        factor.llt(assembly.matrix.as_ref()).ok()?;
+    }
+    Some(factor)
 }
 
 /// The rank-1 point [ρ̃; r̃] with the given rotations and the positions optimal for them.
@@ -98,9 +112,9 @@ pub struct OptimalPositions {
 }
 
 impl OptimalPositions {
-    /// Factors L. `None` if the graph is not connected (L singular).
+    /// Factors L, summed edge by edge (Σ τ over the edges at each pose on the diagonal, −τ
+    /// between the poses of an edge). `None` if the graph is not connected (L singular).
     pub fn new(problem: &Problem) -> Option<Self> {
-        let n = problem.n;
         let mut entries = Vec::with_capacity(3 * problem.terms.len());
         let mut values = Vec::with_capacity(3 * problem.terms.len());
         for t in &problem.terms {
@@ -118,20 +132,11 @@ impl OptimalPositions {
             }
         }
         // Every pose's diagonal, so that a pose without edges makes L singular, not malformed.
-        for a in 0..n.saturating_sub(1) {
+        for a in 0..problem.n - 1 {
             entries.push((a, a));
             values.push(c64::new(0.0, 0.0));
         }
-        let mut assembly = Assembly::<c64>::new(n.saturating_sub(1), &entries);
-        assembly.fill(&values);
-        let mut factor = SparseFactor::analyze_ordered(
-            assembly.matrix.symbolic(),
-            &problem.anchored_order(),
-            Layout::Auto,
-        );
-        if n > 1 {
-            factor.llt(assembly.matrix.as_ref()).ok()?;
-        }
+        let factor = anchored_llt(problem, &entries, &values)?;
         Some(OptimalPositions { factor })
     }
 
