@@ -10,14 +10,14 @@
 //! Unit weights throughout (the paper's cost (5)); graphs from `pgo::simulate` (eq. (47)), seeds
 //! 0, 1, 2, ... per point, so every run prints the same numbers.
 
-use pgo::algorithm1::{
-    ComponentSolution, Rounding, SdpSolver, comparison_estimate, solve_connected,
-};
-use pgo::gauss_newton::refine;
+use pgo::dual::algorithm1::{ComponentSolution, comparison_estimate, solve_connected};
+use pgo::dual::rounding::Rounding;
+use pgo::dual::solver::SdpSolver;
 use pgo::graph::PoseGraph;
-use pgo::matrix::cost;
+use pgo::problem::matrix::cost;
+use pgo::problem::weights::{Weights, edge_weights};
+use pgo::refine::gauss_newton::refine;
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
-use pgo::weights::{Weights, edge_weights};
 use std::fmt::Write as _;
 use std::time::Instant;
 

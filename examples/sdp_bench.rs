@@ -1,4 +1,4 @@
-//! Benchmark of the interior-point solver for the reduced dual SDP (31) (`pgo::sdp::ipm`).
+//! Benchmark of the interior-point solver for the reduced dual SDP (31) (`pgo::dual::ipm`).
 //!
 //! Random pose graphs after the paper's Section 6 model (47): n poses uniform in a 10 m x 10 m
 //! square with uniform headings, a spanning path (i, i+1) plus loop closures (i, j), j > i + 1,
@@ -15,7 +15,7 @@
 
 use faer::prelude::*;
 use faer::{Mat, Par, Side, c64};
-use pgo::sdp::ipm::{self, IpmOptions};
+use pgo::dual::ipm::{self, IpmOptions};
 use std::time::{Duration, Instant};
 
 /// SplitMix64 with Box-Muller normals: deterministic, no extra dependency.
@@ -119,12 +119,12 @@ fn graph_matrix(rng: &mut Rng, n: usize, sigma: f64) -> Mat<c64> {
     reduced_matrix(n, &random_graph(rng, n, loop_probability, sigma))
 }
 
-fn relative_gap(s: &pgo::sdp::DualSolution) -> f64 {
+fn relative_gap(s: &pgo::dual::sdp::DualSolution) -> f64 {
     (s.primal_objective - s.dual_objective).abs() / s.dual_objective.abs().max(1.0)
 }
 
 /// Median wall time of 3 solves, with `par` (None: `ipm::solve`, sequential).
-fn median_time(m: &Mat<c64>, par: Option<Par>) -> (Duration, pgo::sdp::DualSolution) {
+fn median_time(m: &Mat<c64>, par: Option<Par>) -> (Duration, pgo::dual::sdp::DualSolution) {
     let options = IpmOptions::default();
     let mut times = Vec::new();
     let mut last = None;

@@ -6,8 +6,8 @@
 //! ```
 
 use pgo::io::{self, ReadOptions};
+use pgo::problem::weights::{Weights, edge_weights};
 use pgo::staircase::{StaircaseOptions, solve_graph};
-use pgo::weights::{Weights, edge_weights};
 use std::time::Instant;
 
 fn main() {
@@ -43,22 +43,22 @@ fn main() {
         };
         let anchored = pgo::staircase::Anchored::centered(&g, &weights, &g.poses);
         let problem = &anchored.problem;
-        let r = pgo::init::chordal_rotations(problem).expect("connected");
-        let x = pgo::init::with_optimal_positions(problem, &r).expect("connected");
-        let basis = pgo::manifold::TangentBasis::new(problem, &x);
+        let r = pgo::staircase::init::chordal_rotations(problem).expect("connected");
+        let x = pgo::staircase::init::with_optimal_positions(problem, &r).expect("connected");
+        let basis = pgo::staircase::manifold::TangentBasis::new(problem, &x);
         println!(
             "setup medians: matrix {:.4} problem {:.4} chordal {:.4} positions {:.4} certifier {:.4} newton system {:.4}",
             median(&mut || {
-                std::hint::black_box(pgo::matrix::PoseGraphMatrix::new(&g, &weights));
+                std::hint::black_box(pgo::problem::matrix::PoseGraphMatrix::new(&g, &weights));
             }),
             median(&mut || {
                 std::hint::black_box(pgo::staircase::Anchored::centered(&g, &weights, &g.poses));
             }),
             median(&mut || {
-                std::hint::black_box(pgo::init::chordal_rotations(problem));
+                std::hint::black_box(pgo::staircase::init::chordal_rotations(problem));
             }),
             median(&mut || {
-                std::hint::black_box(pgo::init::OptimalPositions::new(problem));
+                std::hint::black_box(pgo::staircase::init::OptimalPositions::new(problem));
             }),
             median(&mut || {
                 std::hint::black_box(pgo::certify::SparseCertifier::new(
@@ -68,7 +68,7 @@ fn main() {
                 ));
             }),
             median(&mut || {
-                std::hint::black_box(pgo::manifold::NewtonSystem::new(problem, &basis));
+                std::hint::black_box(pgo::staircase::manifold::NewtonSystem::new(problem, &basis));
             }),
         );
         let t = Instant::now();

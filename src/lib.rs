@@ -13,37 +13,46 @@
 //! graph matrix W(λ) is positive semidefinite bounds f from below, so `cost - lower_bound` is a
 //! proven bound on the suboptimality of the estimate.
 //!
-//! This crate is the library behind the command-line tools:
-//! - [`io`]: lossless g2o and TORO readers and writers, dialects, precise `PATH:LINE:COL` errors;
-//! - [`graph`]: the data model, kept exactly as read, with a dense index for the numerics;
-//! - [`stats`]: what `pgo-convert --stats` reports;
-//! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them);
-//! - [`viz`]: what the tools' `--rerun-*` flags record for the rerun viewer (cargo feature
-//!   `rerun`, on by default), with solvers' iterations reported through [`progress`].
+//! The library behind the command-line tools, in layers; each imports only the layers below it
+//! (ARCHITECTURE.md):
+//!
+//! - [`solve`] (top): the whole jobs as one call each: [`solve()`] a graph to a certified optimum,
+//!   [`certify_estimate`] any estimate; [`spectrum::spectrum`] the graph's spectra;
+//! - [`spectrum`]: eigenvalues of W̃, W̃(λ*) and M, dense or sparse, and the SZEP;
+//! - [`refine`]: local refinement (Levenberg-Marquardt under the full information, g2o's chi2;
+//!   Gauss-Newton on f);
+//! - [`dual`]: the paper's dual method for small graphs: the dual SDP (31) and its solvers,
+//!   Algorithm 1, the null-space method (46), the roundings;
+//! - [`staircase`]: the scalable solver: chordal initialization, Riemannian Newton, the
+//!   Riemannian staircase;
+//! - [`certify`]: proofs that λ is dual feasible (dense and deflated sparse), the SZEP zero test;
+//! - [`problem`]: weights, the pose graph matrix W̃ and M, the cost, the rank-p form, the gauge;
+//! - [`linalg`]: sparse factorizations, the subspace eigensolver, dense eigendecompositions,
+//!   rounding-error constants, the seeded generator;
+//! - [`simulate`]: random graphs by the paper's model (47);
+//! - [`io`], [`graph`], [`stats`] (the `pgo-io` crate, re-exported): the file model exactly as
+//!   read, the g2o and TORO readers and writers with their dialects, statistics;
+//! - beside them: [`progress`] (solvers report iterations to whoever watches), [`viz`] (what the
+//!   `--rerun-*` flags record, cargo feature `rerun`), [`cli`] (the tools' flags, reports and
+//!   entry points; the binaries in `src/bin/` only call them).
 
-pub mod algorithm1;
 pub mod certify;
 pub mod cli;
+pub mod dual;
 pub mod error;
-pub mod factor;
-pub mod gauss_newton;
 pub mod graph;
-pub mod init;
 pub mod io;
-pub mod manifold;
-pub mod matrix;
-pub mod nullspace;
+pub mod linalg;
+pub mod problem;
 pub mod progress;
 pub mod refine;
-pub mod rounding;
-pub mod sdp;
 pub mod simulate;
+pub mod solve;
 pub mod spectrum;
 pub mod staircase;
 pub mod stats;
-pub mod subspace;
 pub mod viz;
-pub mod weights;
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};
+pub use solve::{Solution, SolveOptions, certify_estimate, solve};

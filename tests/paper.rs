@@ -2,11 +2,13 @@
 //! reference values computed with two independent SDP solvers), Theorem 1 and Prop. 10 on
 //! random graphs, Props. 1/11 on trees, and the tools' reports.
 
-use pgo::algorithm1::{Rounding, SdpSolver, comparison_estimate, solve_connected};
-use pgo::gauss_newton::refine;
+use pgo::dual::algorithm1::{comparison_estimate, solve_connected};
+use pgo::dual::rounding::Rounding;
+use pgo::dual::solver::SdpSolver;
 use pgo::graph::PoseGraph;
+use pgo::problem::weights::{Weights, edge_weights};
+use pgo::refine::gauss_newton::refine;
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
-use pgo::weights::{Weights, edge_weights};
 use std::process::Command;
 
 fn toy() -> PoseGraph {
@@ -14,7 +16,7 @@ fn toy() -> PoseGraph {
     pgo::io::read_path(path, &Default::default()).unwrap().0
 }
 
-fn solve(g: &PoseGraph) -> pgo::algorithm1::ComponentSolution {
+fn solve(g: &PoseGraph) -> pgo::dual::algorithm1::ComponentSolution {
     let w = edge_weights(g, Weights::Unit).unwrap();
     solve_connected(g, &w, SdpSolver::Ipm).unwrap()
 }
@@ -220,7 +222,7 @@ fn solve_and_spectrum_reports() {
     // The written graph has the estimate: its cost, evaluated independently, is the report's.
     let (solved, _) = pgo::io::read_path(out.to_str().unwrap(), &Default::default()).unwrap();
     let w = edge_weights(&solved, Weights::Unit).unwrap();
-    let f = pgo::matrix::cost(&solved, &w, &solved.poses);
+    let f = pgo::problem::matrix::cost(&solved, &w, &solved.poses);
     assert!((f - cost).abs() < 1e-9 * cost, "{f} vs {cost}");
 
     let o = tool("pgo-spectrum")

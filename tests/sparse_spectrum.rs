@@ -7,10 +7,11 @@ mod common;
 
 use faer::prelude::Solve;
 use faer::{Mat, Side, c64};
-use pgo::matrix::PoseGraphMatrix;
+use pgo::linalg::eigen::hermitian_eigenvalues;
+use pgo::problem::matrix::PoseGraphMatrix;
+use pgo::problem::weights::{Weights, edge_weights};
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
-use pgo::spectrum::{hermitian_eigenvalues, scalable_spectrum, sparse_spectra};
-use pgo::weights::{Weights, edge_weights};
+use pgo::spectrum::{scalable_spectrum, sparse_spectra};
 use std::process::Command;
 
 /// M = Q − S* L⁻¹ S from the dense blocks of W̃, exactly Hermitian.

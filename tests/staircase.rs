@@ -4,11 +4,12 @@
 
 mod common;
 
-use pgo::algorithm1::{SdpSolver, solve_connected};
+use pgo::dual::algorithm1::solve_connected;
+use pgo::dual::solver::SdpSolver;
 use pgo::graph::PoseGraph;
+use pgo::problem::weights::{Weights, edge_weights};
 use pgo::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
 use pgo::staircase::{StaircaseOptions, StaircaseSolution, solve_graph};
-use pgo::weights::{Weights, edge_weights};
 use std::process::Command;
 
 fn staircase(g: &PoseGraph, weights: Weights) -> (StaircaseSolution, Vec<pgo::graph::Pose2>) {
@@ -48,7 +49,7 @@ fn bounds_are_sound_and_tight_against_the_sdp_dual() {
             s.cost
         );
         // The poses written out have the reported cost, evaluated edge by edge.
-        let f = pgo::matrix::cost(g, &w, &poses);
+        let f = pgo::problem::matrix::cost(g, &w, &poses);
         assert!((f - s.cost).abs() <= 1e-9 * scale, "{f} vs {}", s.cost);
         if sdp.szep {
             tight += 1;

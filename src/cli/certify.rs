@@ -5,10 +5,8 @@ use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_s
 use crate::error::Error;
 use crate::graph::Pose2;
 use crate::io::{self, ReadOptions};
-use crate::staircase::{StaircaseOptions, certify_estimate, solve_graph};
-use crate::weights::{Weights, edge_weights};
+use crate::solve::{CertifyOptions, EstimateReport as Report, certify_estimate};
 use clap::Parser;
-use serde::Serialize;
 use std::process::ExitCode;
 
 const EXAMPLES: &str = "\
@@ -55,43 +53,6 @@ pub struct Args {
     pub rerun: RerunArgs,
 }
 
-/// The report of one connected component.
-#[derive(Debug, Serialize)]
-pub struct ComponentReport {
-    pub first_id: u32,
-    pub poses: usize,
-    pub edges: usize,
-    pub cost: f64,
-    pub lower_bound: f64,
-    pub suboptimality_bound: f64,
-    pub certified: bool,
-    /// Where the lower bound comes from: the estimate's own multipliers, or pgo's solution.
-    pub bound_from: &'static str,
-    /// The eta of the proof from the estimate's multipliers (absent when that proof failed).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub eta: Option<f64>,
-    /// Norm of the Riemannian gradient at the estimate: 0 at a critical point.
-    pub gradient_norm: f64,
-    /// Eigenvalues of W(lambda) below their resolution (only when the estimate's proof held).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub near_zero_eigenvalues: Option<usize>,
-}
-
-/// The report `--json` prints. Totals are sums over the components.
-#[derive(Debug, Serialize)]
-pub struct Report {
-    pub weights: Weights,
-    pub poses: usize,
-    pub edges: usize,
-    pub cost: f64,
-    pub lower_bound: f64,
-    pub suboptimality_bound: f64,
-    pub relative_suboptimality_bound: f64,
-    pub certified: bool,
-    pub gradient_norm: f64,
-    pub components: Vec<ComponentReport>,
-}
-
 /// Entry point of the `pgo-certify` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
@@ -113,77 +74,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
         Some(path) => estimate_poses(&graph, path)?,
     };
-    let policy = args.weights.weights;
-    let mut components = Vec::new();
-    for (part, members, _) in graph.components() {
-        let weights = edge_weights(&part, policy)?;
-        crate::algorithm1::check_edge_terms(&part, &weights, &weights)?;
-        let estimate: Vec<Pose2> = members.iter().map(|&k| poses[k]).collect();
-        let n = part.num_poses();
-        let cost = crate::matrix::cost(&part, &weights, &estimate);
-        if !cost.is_finite() {
-            return Err(Error::Invalid(format!(
-                "{}: the cost of the estimate overflows a 64-bit float (its poses are too far apart for the weights)",
-                args.estimate.as_deref().unwrap_or(&args.input.input)
-            )));
-        }
-        let reach = args.tol * cost.max(1.0) / n as f64;
-        let mut own = certify_estimate(&part, &weights, &estimate, reach);
-        let own_bound = own.bound.map(|b| b.lower_bound.max(0.0));
-        let (lower_bound, bound_from) = match own_bound {
-            Some(lb) if cost - lb <= args.tol * cost.max(1.0) => (lb, "estimate"),
-            _ => {
-                // Not certified by its own multipliers: the optimum's proven bound bounds it.
-                let options = StaircaseOptions {
-                    tolerance: args.tol,
-                    ..Default::default()
-                };
-                let solved = solve_graph(&part, &weights, &options, &mut |_| {})
-                    .map(|(s, _)| s.lower_bound)
-                    .unwrap_or(0.0);
-                match own_bound {
-                    Some(lb) if lb >= solved => (lb, "estimate"),
-                    _ => (solved, "solution"),
-                }
-            }
-        };
-        let near_zero = own
-            .bound
-            .and_then(|b| own.certifier.near_zero(Some(&b), &own.lambda));
-        let suboptimality_bound = cost - lower_bound;
-        components.push(ComponentReport {
-            first_id: part.ids[0],
-            poses: n,
-            edges: part.edges.len(),
-            cost,
-            lower_bound,
-            suboptimality_bound,
-            certified: suboptimality_bound <= args.tol * cost.max(1.0),
-            bound_from,
-            eta: own.bound.map(|b| b.eta),
-            gradient_norm: own.gradient_norm,
-            near_zero_eigenvalues: near_zero,
-        });
-    }
-    let cost: f64 = components.iter().map(|c| c.cost).sum();
-    let lower_bound: f64 = components.iter().map(|c| c.lower_bound).sum();
-    let suboptimality_bound = cost - lower_bound;
-    let report = Report {
-        weights: policy,
-        poses: graph.num_poses(),
-        edges: graph.edges.len(),
-        cost,
-        lower_bound,
-        suboptimality_bound,
-        relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
-        certified: components.iter().all(|c| c.certified),
-        gradient_norm: components
-            .iter()
-            .map(|c| c.gradient_norm * c.gradient_norm)
-            .sum::<f64>()
-            .sqrt(),
-        components,
+    let options = CertifyOptions {
+        weights: args.weights.weights,
+        tolerance: args.tol,
     };
+    let source = args.estimate.as_deref().unwrap_or(&args.input.input);
+    let report = certify_estimate(&graph, &poses, &options, source)?;
     // The estimate as the graph to view, and the certificate as a text entry.
     let mut estimate = graph.clone();
     estimate.poses = poses;

@@ -3,8 +3,8 @@
 use crate::error::Error;
 use crate::graph::PoseGraph;
 use crate::io::{self, Dialect, Format, ReadOptions, ReadReport};
+use crate::problem::weights::Weights;
 use crate::viz::{self, Recorder};
-use crate::weights::Weights;
 use clap::Args;
 
 /// How to read the input graph.
@@ -98,21 +98,7 @@ impl RerunArgs {
     }
 }
 
-/// Largest graph (pgo-solve --method sdp) or component (pgo-spectrum) the dense SDP path of
-/// Algorithm 1 takes; pgo-spectrum analyses larger components sparse.
-pub const DENSE_MAX_POSES: usize = 2000;
-
-/// Refuses graphs too large for the dense SDP path (`tool` names the tool and the flag that
-/// asked for it), with a message saying so and what to use instead.
-pub fn check_dense_size(graph: &PoseGraph, tool: &str) -> crate::Result<()> {
-    if graph.num_poses() > DENSE_MAX_POSES {
-        return Err(Error::Invalid(format!(
-            "{tool}: {} poses is more than the {DENSE_MAX_POSES} the dense SDP path handles; --method auto or staircase solves it with the scalable solver",
-            graph.num_poses()
-        )));
-    }
-    Ok(())
-}
+pub use crate::dual::algorithm1::{DENSE_MAX_POSES, check_dense_size};
 
 /// The value of `--tol` (pgo-solve, pgo-certify): a relative suboptimality, finite and ≥ 0.
 pub fn parse_tolerance(s: &str) -> Result<f64, String> {

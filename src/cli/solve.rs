@@ -3,12 +3,11 @@
 use super::common::{
     InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
 };
-use crate::algorithm1::{ComponentSolution, Rounding, SdpSolver, solve_connected};
+use crate::dual::rounding::Rounding;
+use crate::dual::solver::SdpSolver;
 use crate::error::Error;
-use crate::graph::{Pose2, PoseGraph};
 use crate::io::{self, Format, WriteOptions};
-use crate::staircase::{StaircaseOptions, StaircaseSolution, solve_graph};
-use crate::weights::{Weights, edge_weights};
+use crate::solve::{Method, Solution, SolveOptions, solve};
 use clap::Parser;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -79,67 +78,6 @@ pub struct Args {
     pub rerun: RerunArgs,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// sdp for components of at most 100 poses, staircase beyond
-    Auto,
-    /// Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)
-    Sdp,
-    /// The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase
-    Staircase,
-}
-
-/// Components up to this size go to the SDP under --method auto.
-pub const AUTO_SDP_MAX_POSES: usize = 100;
-
-/// The report of one connected component.
-#[derive(Debug, Serialize)]
-pub struct ComponentReport {
-    /// Ids of the first (smallest) and last pose of the component.
-    pub first_id: u32,
-    pub poses: usize,
-    pub edges: usize,
-    pub cost: f64,
-    pub lower_bound: f64,
-    pub suboptimality_bound: f64,
-    pub certified: bool,
-    pub szep: bool,
-    pub near_zero_eigenvalues: usize,
-    /// sdp or staircase.
-    pub method: Method,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rounding: Option<Rounding>,
-    /// The smallest eigenvalues of W(lambda*), ascending (at most 4; sdp only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub penalized_eigenvalues: Option<Vec<f64>>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub sdp_iterations: Option<usize>,
-    /// Whether the SDP solver reached its tolerance (if not, the bound is proven all the same,
-    /// from the dual feasible multipliers it reached, and only weaker).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub sdp_converged: Option<bool>,
-    /// The largest rank the staircase reached (1: no staircase needed).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rank: Option<usize>,
-    /// Newton iterations, all ranks together.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub iterations: Option<usize>,
-    /// The certificate's eta: W(lambda) + eta*blkdiag(0, I) was proven PSD.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub eta: Option<f64>,
-    /// Norm of the Riemannian gradient at the estimate.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gradient_norm: Option<f64>,
-    /// With --refine: g2o's chi2 of the certified estimate, and after refinement.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub certified_chi2: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub refined_chi2: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub refine_iterations: Option<usize>,
-}
-
 #[derive(Debug, Serialize)]
 pub struct Timings {
     pub read_s: f64,
@@ -147,31 +85,11 @@ pub struct Timings {
     pub write_s: f64,
 }
 
-/// The report `--json` prints. Totals are sums over the components.
+/// The report `--json` prints: the solution's figures and the timings.
 #[derive(Debug, Serialize)]
-pub struct Report {
-    pub method: Method,
-    pub solver: SdpSolver,
-    pub weights: Weights,
-    pub poses: usize,
-    pub edges: usize,
-    /// f at the estimate.
-    pub cost: f64,
-    /// Proven lower bound on the optimum f*.
-    pub lower_bound: f64,
-    /// cost − lower_bound: the estimate is at most this far from optimal.
-    pub suboptimality_bound: f64,
-    /// With --refine: g2o's chi2 of the written (refined) estimate, summed over components.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub refined_chi2: Option<f64>,
-    /// suboptimality_bound / max(1, |cost|).
-    pub relative_suboptimality_bound: f64,
-    pub certified: bool,
-    pub szep: bool,
-    pub near_zero_eigenvalues: usize,
-    /// Whether the SDP solver reached its tolerance on every component.
-    pub sdp_converged: bool,
-    pub components: Vec<ComponentReport>,
+pub struct Report<'a> {
+    #[serde(flatten)]
+    pub solution: &'a Solution,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
 }
@@ -191,65 +109,19 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if args.method == Method::Sdp {
         check_dense_size(&graph, "pgo-solve --method sdp")?;
     }
-    let policy = args.weights.weights;
+    let options = SolveOptions {
+        method: args.method,
+        solver: args.solver,
+        weights: args.weights.weights,
+        tolerance: args.tol,
+        refine: args.refine,
+    };
     let t1 = Instant::now();
-    let mut components = Vec::new();
-    let mut solutions: Vec<(Vec<Pose2>, Vec<usize>)> = Vec::new();
-    for (part, members, _) in graph.components() {
-        let weights = edge_weights(&part, policy)?;
-        let sdp = match args.method {
-            Method::Sdp => true,
-            Method::Staircase => false,
-            Method::Auto => part.num_poses() <= AUTO_SDP_MAX_POSES,
-        };
-        if sdp {
-            let solution = rec.observe(|| solve_connected(&part, &weights, args.solver))?;
-            components.push(component_report(&part, &solution, args.tol));
-            solutions.push((solution.poses, members));
-        } else {
-            crate::algorithm1::check_edge_terms(&part, &weights, &weights)?;
-            let options = StaircaseOptions {
-                tolerance: args.tol,
-                ..Default::default()
-            };
-            // Newton steps on the `iteration` timeline of a rerun recording (crate::progress).
-            let mut step = 0u64;
-            let mut report = |it: &crate::staircase::Iteration| {
-                step += 1;
-                crate::progress::iteration(
-                    step,
-                    &[
-                        ("cost", it.cost),
-                        ("gradient_norm", it.gradient_norm),
-                        ("rank", it.rank as f64),
-                        ("damping", it.damping),
-                    ],
-                );
-            };
-            let (solution, poses) = rec
-                .observe(|| solve_graph(&part, &weights, &options, &mut report))
-                .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
-            components.push(staircase_report(&part, &solution, args.tol));
-            solutions.push((poses, members));
-        }
-        if args.refine {
-            let (poses, _) = solutions.last_mut().expect("pushed above");
-            let report = components.last_mut().expect("pushed above");
-            let refined = crate::refine::refine(&part, poses, &Default::default())?;
-            report.certified_chi2 = Some(refined.initial_chi2);
-            report.refined_chi2 = Some(refined.chi2);
-            report.refine_iterations = Some(refined.iterations);
-            *poses = refined.poses;
-        }
-    }
+    let solution = rec.observe(|| solve(&graph, &options))?;
     let solve_s = t1.elapsed().as_secs_f64();
-    for (poses, members) in &solutions {
-        for (pose, &k) in poses.iter().zip(members) {
-            graph.poses[k] = *pose;
-        }
-    }
+    graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
-    rec.optimized(&graph, policy);
+    rec.optimized(&graph, options.weights);
 
     let t2 = Instant::now();
     let output = match (&args.output, args.json) {
@@ -271,28 +143,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     let write_s = t2.elapsed().as_secs_f64();
 
-    // Folded from +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
-    let cost = components.iter().fold(0.0, |a, c| a + c.cost);
-    let lower_bound = components.iter().fold(0.0, |a, c| a + c.lower_bound);
-    let suboptimality_bound = cost - lower_bound;
     let report = Report {
-        method: args.method,
-        solver: args.solver,
-        weights: policy,
-        poses: graph.num_poses(),
-        edges: graph.edges.len(),
-        cost,
-        lower_bound,
-        suboptimality_bound,
-        refined_chi2: args
-            .refine
-            .then(|| components.iter().filter_map(|c| c.refined_chi2).sum()),
-        relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
-        certified: components.iter().all(|c| c.certified),
-        szep: components.iter().all(|c| c.szep),
-        near_zero_eigenvalues: components.iter().map(|c| c.near_zero_eigenvalues).sum(),
-        sdp_converged: components.iter().all(|c| c.sdp_converged != Some(false)),
-        components,
+        solution: &solution,
         timings: (!args.no_timings).then_some(Timings {
             read_s,
             solve_s,
@@ -305,75 +157,18 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         eprint!("{}", text_report(&args.input.input, &report));
     }
     rec.certificate(&crate::viz::Certificate {
-        cost: report.cost,
-        lower_bound: report.lower_bound,
-        certified: report.certified,
-        szep: report.szep,
-        near_zero: report.near_zero_eigenvalues,
+        cost: solution.cost,
+        lower_bound: solution.lower_bound,
+        certified: solution.certified,
+        szep: solution.szep,
+        near_zero: solution.near_zero_eigenvalues,
     });
     rec.finish()?;
     Ok(ExitCode::SUCCESS)
 }
 
-fn component_report(
-    part: &crate::graph::PoseGraph,
-    s: &ComponentSolution,
-    tol: f64,
-) -> ComponentReport {
-    let suboptimality_bound = s.cost - s.lower_bound;
-    ComponentReport {
-        first_id: part.ids[0],
-        poses: part.num_poses(),
-        edges: part.edges.len(),
-        cost: s.cost,
-        lower_bound: s.lower_bound,
-        suboptimality_bound,
-        certified: s.szep && suboptimality_bound <= tol * s.cost.abs().max(1.0),
-        szep: s.szep,
-        near_zero_eigenvalues: s.near_zero,
-        method: Method::Sdp,
-        rounding: Some(s.rounding),
-        penalized_eigenvalues: Some(s.eigenvalues.iter().take(4).copied().collect()),
-        sdp_iterations: Some(s.dual.iterations),
-        sdp_converged: Some(s.dual.converged),
-        rank: None,
-        iterations: None,
-        eta: None,
-        gradient_norm: None,
-        certified_chi2: None,
-        refined_chi2: None,
-        refine_iterations: None,
-    }
-}
-
-fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tol: f64) -> ComponentReport {
-    let suboptimality_bound = s.cost - s.lower_bound;
-    ComponentReport {
-        first_id: part.ids[0],
-        poses: part.num_poses(),
-        edges: part.edges.len(),
-        cost: s.cost,
-        lower_bound: s.lower_bound,
-        suboptimality_bound,
-        certified: s.bound.is_some() && suboptimality_bound <= tol * s.cost.abs().max(1.0),
-        szep: s.near_zero.is_some_and(|z| z <= 1),
-        near_zero_eigenvalues: s.near_zero.unwrap_or(0),
-        method: Method::Staircase,
-        rounding: None,
-        penalized_eigenvalues: None,
-        sdp_iterations: None,
-        sdp_converged: None,
-        rank: Some(s.rank),
-        iterations: Some(s.iterations),
-        eta: s.bound.map(|b| b.eta),
-        gradient_norm: Some(s.gradient_norm),
-        certified_chi2: None,
-        refined_chi2: None,
-        refine_iterations: None,
-    }
-}
-
-fn text_report(input: &str, r: &Report) -> String {
+fn text_report(input: &str, report: &Report) -> String {
+    let r = report.solution;
     let mut out = format!(
         "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {} (sdp solver {})\n",
         if input == "-" { "<stdin>" } else { input },
@@ -384,11 +179,7 @@ fn text_report(input: &str, r: &Report) -> String {
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),
-        match r.method {
-            Method::Auto => "auto",
-            Method::Sdp => "sdp",
-            Method::Staircase => "staircase",
-        },
+        r.method.name(),
         match r.solver {
             SdpSolver::Ipm => "ipm",
             SdpSolver::Clarabel => "clarabel",
@@ -475,7 +266,7 @@ fn text_report(input: &str, r: &Report) -> String {
             ),
         );
     }
-    if let Some(t) = &r.timings {
+    if let Some(t) = &report.timings {
         out += &row(
             "time",
             format!(

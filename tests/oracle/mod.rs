@@ -153,8 +153,9 @@ pub const SOLVE_MAX_EDGES: usize = 24;
 /// Reads `data` (format from the tags) and, if it is a graph of at most [`SOLVE_MAX_POSES`]
 /// poses, runs the solve path of `pgo-solve` on it with both weight policies.
 pub fn check_solve(data: &[u8]) {
-    use pgo::algorithm1::{SdpSolver, solve_connected};
-    use pgo::weights::{Weights, edge_weights};
+    use pgo::dual::algorithm1::solve_connected;
+    use pgo::dual::solver::SdpSolver;
+    use pgo::problem::weights::{Weights, edge_weights};
     let options = ReadOptions {
         allow_indefinite: true,
         ..Default::default()
@@ -202,10 +203,10 @@ pub fn check_solve(data: &[u8]) {
 
 fn check_solution(
     part: &PoseGraph,
-    weights: &[pgo::weights::EdgeWeight],
-    s: &pgo::algorithm1::ComponentSolution,
+    weights: &[pgo::problem::weights::EdgeWeight],
+    s: &pgo::dual::algorithm1::ComponentSolution,
 ) {
-    use pgo::matrix::cost;
+    use pgo::problem::matrix::cost;
     assert_eq!(s.poses.len(), part.num_poses());
     assert!(s.cost.is_finite() && s.cost >= 0.0, "cost {}", s.cost);
     assert!(!s.lower_bound.is_nan(), "bound is NaN");

@@ -4,64 +4,14 @@
 //! (the smallest few, [`sparse_spectra`], with λ from the scalable solver,
 //! [`scalable_spectrum`]).
 
+use crate::certify::szep::{near_zero, zero_threshold};
 use crate::error::Error;
 use crate::graph::PoseGraph;
-use crate::manifold::Problem;
-use crate::matrix::PoseGraphMatrix;
+use crate::linalg::subspace::{Pencil, SubspaceOptions, smallest_eigenvalues};
+use crate::problem::rank_p::Problem;
+use crate::problem::weights::EdgeWeight;
 use crate::staircase::{StaircaseOptions, solve_anchored};
-use crate::subspace::{Pencil, SubspaceOptions, smallest_eigenvalues};
-use crate::weights::EdgeWeight;
-use faer::{Mat, Side, c64};
-
-/// The zero test of the SZEP: an eigenvalue μ of W̃(λ*) counts as zero when it is within
-/// ZERO_FACTOR times the accuracy of the dual solution, that is of the larger of its duality gap
-/// |Tr(M X*) − Σλ*| and the rounding allowance of the eigenvalue computation (d·u·‖W̃‖_F), and
-/// never below 1e-12 of the largest diagonal entry of W̃. The eigenvalues a perturbation δ of λ*
-/// moves off zero stay within about δ, while the first nonzero eigenvalue of a graph with the
-/// SZEP stays put: the paper's toy graph has its two zeros at 1e-13 against a gap of 1e-10 and
-/// its next eigenvalue at 0.027.
-pub const ZERO_FACTOR: f64 = 1e3;
-
-/// The absolute zero threshold for the eigenvalues of W̃(λ*) (see [`ZERO_FACTOR`]), given the
-/// duality gap the SDP solver reached.
-/// Summed over the stored entries column by column: the same sums as over the dense matrix.
-pub fn zero_threshold(matrix: &PoseGraphMatrix, duality_gap: f64) -> f64 {
-    let d = matrix.dim();
-    let mut max_diag = 1.0f64;
-    let mut fro2 = 0.0;
-    for c in 0..d {
-        let rows = matrix.w.symbolic().row_idx_of_col_raw(c);
-        for (&r, v) in rows.iter().zip(matrix.w.val_of_col(c)) {
-            if r == c {
-                max_diag = max_diag.max(v.re);
-            }
-            fro2 += v.norm_sqr();
-        }
-    }
-    let rounding = d as f64 * f64::EPSILON * fro2.sqrt();
-    (ZERO_FACTOR * duality_gap.abs().max(rounding)).max(1e-12 * max_diag)
-}
-
-/// Eigenvalues (ascending) and eigenvectors (columns) of a Hermitian matrix.
-pub fn hermitian_eigen(m: &Mat<c64>) -> (Vec<f64>, Mat<c64>) {
-    let evd = m
-        .self_adjoint_eigen(Side::Lower)
-        .expect("the Hermitian eigensolver converges on finite matrices");
-    let s = evd.S();
-    let values = (0..m.nrows()).map(|k| s[k].re).collect();
-    (values, evd.U().to_owned())
-}
-
-/// Eigenvalues (ascending) of a Hermitian matrix.
-pub fn hermitian_eigenvalues(m: &Mat<c64>) -> Vec<f64> {
-    m.self_adjoint_eigenvalues(Side::Lower)
-        .expect("the Hermitian eigensolver converges on finite matrices")
-}
-
-/// How many of the ascending `values` are at most `threshold`.
-pub fn near_zero(values: &[f64], threshold: f64) -> usize {
-    values.iter().take_while(|&&v| v <= threshold).count()
-}
+use faer::{Mat, c64};
 
 /// The smallest eigenvalues of the three matrices of a connected graph, computed sparse
 /// ([`sparse_spectra`]).
@@ -73,14 +23,14 @@ pub struct SparseSpectra {
     pub penalized_eigenvalues: Vec<f64>,
     /// The smallest eigenvalues of M = Q̃ − S̃* L⁻¹ S̃ (eq. (38)), ascending.
     pub rotation_eigenvalues: Vec<f64>,
-    /// Whether the three subspace iterations converged ([`crate::subspace`]).
+    /// Whether the three subspace iterations converged ([`crate::linalg::subspace`]).
     pub converged: bool,
 }
 
 /// The `count` smallest eigenvalues of W̃, of W̃(λ) and of M of a connected graph (W̃ anchored at
 /// pose 0 as in [`PoseGraphMatrix::new`]; `lambda` one multiplier per pose in the graph's
 /// order), without dense matrices: one sparse factorization per matrix and shift-invert
-/// subspace iteration ([`crate::subspace`]). M is the pencil (W̃, blkdiag(0, I)), never formed.
+/// subspace iteration ([`crate::linalg::subspace`]). M is the pencil (W̃, blkdiag(0, I)), never formed.
 pub fn sparse_spectra(
     graph: &PoseGraph,
     weights: &[EdgeWeight],
@@ -132,7 +82,7 @@ pub fn sparse_spectra(
         count,
         &options,
     )
-    .map_err(|_| crate::algorithm1::singular_laplacian(graph, weights))?;
+    .map_err(|_| crate::problem::checks::singular_laplacian(graph, weights))?;
     Ok(SparseSpectra {
         converged: w.converged && wl.converged && m.converged,
         eigenvalues: w.values,
@@ -212,10 +162,10 @@ pub fn scalable_spectrum(
     weights: &[EdgeWeight],
     count: usize,
 ) -> Result<ScalableSpectrum, Error> {
-    crate::algorithm1::check_edge_terms(graph, weights, weights)?;
+    crate::problem::checks::check_edge_terms(graph, weights, weights)?;
     let (solution, anchored) =
         solve_anchored(graph, weights, &StaircaseOptions::default(), &mut |_| {})
-            .ok_or_else(|| crate::algorithm1::singular_laplacian(graph, weights))?;
+            .ok_or_else(|| crate::problem::checks::singular_laplacian(graph, weights))?;
     let lambda = anchored.graph_order(&solution.lambda);
     let spectra = sparse_spectra(graph, weights, &lambda, count)?;
     let near_zero = solution.near_zero.unwrap_or_else(|| {

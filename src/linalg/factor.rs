@@ -7,7 +7,7 @@
 //! (needed for inertia) nor the factor's columns (needed for negative-curvature directions), so
 //! both are read here from the numeric factor and its symbolic structure.
 
-use crate::rounding::gamma_with;
+use crate::linalg::roundoff::gamma_with;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -362,7 +362,9 @@ impl<T: Scalar> SparseFactor<T> {
         );
         // The row sums of moduli are computed with relative error below γ_{2k+4} (and the
         // moduli within 4 units of the double rounding).
-        let sums = 1.0 + gamma_with(crate::rounding::U, 2 * k_max + 4) + 4.0 * crate::rounding::U;
+        let sums = 1.0
+            + gamma_with(crate::linalg::roundoff::U, 2 * k_max + 4)
+            + 4.0 * crate::linalg::roundoff::U;
         rows_sum
             .iter()
             .zip(&row_count)
@@ -447,7 +449,7 @@ pub trait Scalar:
         values.iter().map(|v| v.modulus()).collect()
     }
     /// The unit roundoff of the arithmetic, for the error bounds of [`SparseFactor`].
-    const UNIT_ROUNDOFF: f64 = crate::rounding::U;
+    const UNIT_ROUNDOFF: f64 = crate::linalg::roundoff::U;
 }
 
 impl Scalar for f64 {
@@ -470,7 +472,7 @@ impl Scalar for faer::cx128 {
     fn modulus(self) -> f64 {
         (self.re.0 * self.re.0 + self.im.0 * self.im.0).sqrt() * (1.0 + 4.0 * f64::EPSILON)
     }
-    const UNIT_ROUNDOFF: f64 = 32.0 * crate::rounding::U * crate::rounding::U;
+    const UNIT_ROUNDOFF: f64 = 32.0 * crate::linalg::roundoff::U * crate::linalg::roundoff::U;
 }
 
 impl Scalar for faer::c64 {

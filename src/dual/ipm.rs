@@ -105,7 +105,7 @@
 //! (·)G, and four smallest-eigenvalue computations (one per step length), plus an
 //! eigendecomposition per polishing attempt. Typically 10-30 iterations.
 
-use super::{DualSolution, SdpError};
+use super::sdp::{DualSolution, SdpError};
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::{factor as llt_factor, solve as llt_solve};

@@ -8,8 +8,8 @@
 //! global rotation and translation).
 
 use crate::graph::{Pose2, PoseGraph};
-use crate::matrix::cost;
-use crate::weights::EdgeWeight;
+use crate::problem::matrix::cost;
+use crate::problem::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::{Mat, Side};
 
@@ -132,7 +132,7 @@ pub fn refine(
 mod tests {
     use super::*;
     use crate::graph::{Edge, NoiseKind, SymMat3};
-    use crate::weights::{Weights, edge_weights};
+    use crate::problem::weights::{Weights, edge_weights};
 
     fn triangle(closing: Pose2) -> PoseGraph {
         let z = |x, y, t| Pose2::new(x, y, t);

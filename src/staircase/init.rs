@@ -7,8 +7,8 @@
 //! - Positions optimal for given rotations: ρ̃ = −L⁻¹ S̃ r̃ (eq. (24)), by a sparse Cholesky of the
 //!   anchored Laplacian L.
 
-use crate::factor::{Assembly, Layout, SparseFactor};
-use crate::manifold::{Point, Problem};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor};
+use crate::problem::rank_p::{Point, Problem};
 use faer::c64;
 
 /// Chordal rotations (unit modulus), r_0 = 1. `None` if the graph is not connected.
@@ -165,8 +165,8 @@ impl OptimalPositions {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::problem::weights::{Weights, edge_weights};
     use crate::simulate::{SimulationConfig, simulate};
-    use crate::weights::{Weights, edge_weights};
 
     /// ∂f/∂ρ̃ = 2(W̃x̃)_ρ = 0 at the positions optimal for the rotations (f is convex quadratic in
     /// ρ̃ with Hessian 2L ≻ 0), for a rank-1 and a rank-2 point with arbitrary rotations; and no

@@ -86,7 +86,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors};
 use faer::{Mat, MatRef, Par, c64};
 
-use super::{DualSolution, SdpError};
+use super::sdp::{DualSolution, SdpError};
 
 /// Index of entry (row, col), row ≤ col, in clarabel's `PSDTriangleConeT` vector (upper triangle
 /// by columns).
@@ -153,7 +153,7 @@ fn smallest_eigenvalue(h: MatRef<'_, c64>) -> Result<f64, SdpError> {
 }
 
 /// Solves the reduced dual SDP d* = max Σ λ_i s.t. M − diag(λ) ⪰ 0 (the paper's (31) with the
-/// positions eliminated, see [`crate::sdp`]) with clarabel, and recovers the primal (37)
+/// positions eliminated, see [`crate::dual::sdp`]) with clarabel, and recovers the primal (37)
 /// X* (Hermitian, PSD, unit diagonal) from clarabel's dual variable; see the module docs for
 /// the embedding and the derivation.
 ///
@@ -467,7 +467,7 @@ mod tests {
 
     #[test]
     fn agrees_with_the_interior_point_method() {
-        use crate::sdp::ipm::{IpmOptions, solve as ipm_solve};
+        use crate::dual::ipm::{IpmOptions, solve as ipm_solve};
         let mut rng = Rng(23);
         let cases = [
             (5, 0.1),

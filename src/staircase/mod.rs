@@ -4,7 +4,7 @@
 //! unit-norm rows; SE-Sync's scheme with ℂ in place of ℝ²) escaping saddles along a direction of
 //! negative curvature of W̃(λ), then rounding back to rank 1 and certifying again.
 //!
-//! Local optimization: Newton steps on the tangent coordinates of [`crate::manifold`], with the
+//! Local optimization: Newton steps on the tangent coordinates of [`crate::problem::rank_p`], with the
 //! exact Riemannian Hessian 2 Bᵀ W̃(λ) B, damped Levenberg-Marquardt style (H + μD, D the diagonal
 //! of 2W̃, μ updated by Nielsen's rule from the ratio of actual to predicted decrease). The
 //! Hessian's pattern is that of W̃ for every iterate, so one symbolic sparse Cholesky per rank is
@@ -23,13 +23,20 @@
 //! chains). In the quadratic regime the cost then agrees with the local minimum's to far better
 //! than 1e-9 relative; the proven bound is reported separately and does not rely on this.
 
+//!
+//! May use: [`crate::certify`], [`crate::problem`], [`crate::linalg`].
+
+pub mod init;
+pub mod manifold;
+
 use crate::certify::{SparseBound, SparseCertifier};
-use crate::factor::SparseFactor;
 use crate::graph::{Pose2, PoseGraph};
-use crate::init::{OptimalPositions, chordal_rotations};
-use crate::manifold::{NewtonSystem, Point, Problem, TangentBasis};
-use crate::weights::EdgeWeight;
+use crate::linalg::factor::SparseFactor;
+use crate::problem::rank_p::{Point, Problem};
+use crate::problem::weights::EdgeWeight;
 use faer::c64;
+use init::{OptimalPositions, chordal_rotations};
+use manifold::{NewtonSystem, TangentBasis};
 
 /// One accepted (or rejected) step, for progress reports and the rerun viewer.
 #[derive(Debug, Clone, Copy)]
@@ -180,7 +187,7 @@ impl Anchored {
         let swap = swapper(self.anchor);
         let internal = self.problem.matrix.poses(&x.x);
         let poses: Vec<Pose2> = (0..internal.len()).map(|k| internal[swap(k)]).collect();
-        crate::algorithm1::move_to_anchor(&poses, pose0)
+        crate::problem::gauge::move_to_anchor(&poses, pose0)
     }
 }
 
@@ -735,7 +742,7 @@ pub fn round_to_rank_one(problem: &Problem, x: &Point) -> Point {
             }
         }
     }
-    let (_, vectors) = crate::spectrum::hermitian_eigen(&c);
+    let (_, vectors) = crate::linalg::eigen::hermitian_eigen(&c);
     let u: Vec<c64> = (0..p).map(|s| vectors[(s, p - 1)]).collect();
     let mut out = Vec::with_capacity(problem.rows());
     for k in 0..problem.rows() {

@@ -36,7 +36,7 @@
 //! dense kernels with `Par::Seq`: its default parallel products split their sums by thread
 //! count) and the start block comes from a fixed seed, so the same input gives the same bits.
 
-use crate::factor::{Assembly, NotFactorable, SparseFactor};
+use crate::linalg::factor::{Assembly, NotFactorable, SparseFactor};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{ComputeEigenvectors, self_adjoint_evd, self_adjoint_evd_scratch};
 use faer::linalg::householder;
@@ -164,7 +164,7 @@ pub fn smallest_eigenvalues(
     let mut factor = SparseFactor::<c64>::analyze_ordered(
         assembly.matrix.symbolic(),
         order,
-        crate::factor::Layout::Auto,
+        crate::linalg::factor::Layout::Auto,
     );
     let mut sigma = 1e-12 * scale;
     let mut values: Vec<c64> = upper.iter().map(|&(_, _, v)| v).collect();
@@ -213,7 +213,7 @@ pub fn smallest_eigenvalues(
         factor.solve_block_in_place(z.as_mut());
         z
     };
-    let mut rng = crate::simulate::Rng::new(options.seed);
+    let mut rng = crate::linalg::rng::Rng::new(options.seed);
     let start = Mat::<c64>::from_fn(m, block, |_, _| {
         c64::new(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0)
     });
@@ -417,13 +417,13 @@ fn upper_times(dim: usize, upper: &[(usize, usize, c64)], z: &Mat<c64>) -> Mat<c
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spectrum::hermitian_eigenvalues;
+    use crate::linalg::eigen::hermitian_eigenvalues;
     use faer::Side;
     use faer::prelude::Solve;
 
     /// A random sparse Hermitian matrix (a ring with chords), dense and as an upper triangle.
     fn ring(dim: usize, shift: f64) -> (Mat<c64>, Vec<(usize, usize, c64)>) {
-        let mut rng = crate::simulate::Rng::new(3);
+        let mut rng = crate::linalg::rng::Rng::new(3);
         let mut dense = Mat::<c64>::zeros(dim, dim);
         let mut add = |a: usize, b: usize, v: c64| {
             dense[(a, b)] += v;

@@ -4,7 +4,7 @@
 //!
 //! Layout of x̃ = [ρ̃; r̃] ∈ ℂ^{2n−1}: pose 0 (the smallest id) is the anchor, p_0 = 0 (eq. (15));
 //! entries 0..n−1 hold the positions of poses 1..n−1, entries n−1..2n−1 the rotations of poses
-//! 0..n−1. With per-edge weights (τ, κ) ([`crate::weights`]) each edge (i, j) adds
+//! 0..n−1. With per-edge weights (τ, κ) ([`crate::problem::weights`]) each edge (i, j) adds
 //!
 //! ```text
 //! τ |p_j − p_i − Δ r_i|² + κ |r_j − R r_i|²,    Δ = dx + i·dy,  R = e^{i·dθ}
@@ -16,7 +16,7 @@
 //! p_0 are dropped (anchoring).
 
 use crate::graph::{Edge, Pose2, PoseGraph};
-use crate::weights::EdgeWeight;
+use crate::problem::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side, c64};
@@ -238,7 +238,7 @@ pub fn edge_cost(e: &Edge, w: EdgeWeight, poses: &[Pose2]) -> f64 {
 pub(crate) mod tests {
     use super::*;
     use crate::graph::{Edge, SymMat3};
-    use crate::weights::{Weights, edge_weights};
+    use crate::problem::weights::{Weights, edge_weights};
 
     /// A small deterministic generator, so that the tests need no dependency.
     pub(crate) struct Rng(pub(crate) u64);

@@ -1,6 +1,6 @@
 //! The dual SDP (31) in its reduced form: with positions eliminated (Schur complement, L ≻ 0 for
 //! a connected graph), W̃(λ) ⪰ 0 iff M − diag(λ) ⪰ 0 with M = Q̃ − S̃* L⁻¹ S̃ (see
-//! [`crate::matrix`]), so (31) is
+//! [`crate::problem::matrix`]), so (31) is
 //!
 //! ```text
 //! d* = max Σ λ_i   s.t.  M − diag(λ) ⪰ 0            (dual, (31) reduced)
@@ -8,13 +8,9 @@
 //! ```
 //!
 //! the complex analogue of the max-cut SDP. Two solvers: a dedicated primal-dual interior-point
-//! method on faer ([`ipm`], default build) and clarabel on the real embedding of the Hermitian
+//! method on faer ([`crate::dual::ipm`], default build) and clarabel on the real embedding of the Hermitian
 //! cone (`clarabel` module, behind the `clarabel-sdp` cargo feature, which needs a system
 //! OpenBLAS).
-
-#[cfg(feature = "clarabel-sdp")]
-pub mod clarabel;
-pub mod ipm;
 
 use faer::{Mat, c64};
 

@@ -664,7 +664,7 @@ impl NormalEquations {
 mod tests {
     use super::*;
     use crate::graph::{Edge, NoiseKind};
-    use crate::matrix::tests::{Rng, graph, random_poses};
+    use crate::problem::matrix::tests::{Rng, graph, random_poses};
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI, SQRT_2};
 
     const OMEGA: SymMat3 = SymMat3([2.0, 0.5, 0.3, 3.0, 0.1, 4.0]);

@@ -1,0 +1,316 @@
+//! What the tools record, as plain [`Entity`] values computed without rerun (so tested in every
+//! build): the graph, the estimate and its residuals, the certificate, the spectrum, the solver
+//! iterations.
+
+use super::{
+    Certificate, Entity, HEADING_COLOR, Item, LINE_RADIUS, LOOP_CLOSURE_COLOR, ODOMETRY_COLOR,
+    POINT_RADIUS, POSE_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
+};
+use crate::graph::PoseGraph;
+
+/// Formats a number for the text entries: shortest round-trip form.
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        let mut out = Vec::new();
+        crate::io::format_f64(v, &mut out);
+        String::from_utf8_lossy(&out).into_owned()
+    } else {
+        v.to_string()
+    }
+}
+
+fn point(x: f64, y: f64) -> [f32; 2] {
+    [x as f32, y as f32]
+}
+
+/// Whether an edge counts as odometry: consecutive ids (|id_i − id_j| = 1).
+pub fn is_odometry(graph: &PoseGraph, e: &crate::graph::Edge) -> bool {
+    graph.ids[e.i].abs_diff(graph.ids[e.j]) == 1
+}
+
+/// Length of the heading arrows: half the median length of the edges' translation
+/// measurements (1 when there is none).
+pub fn heading_length(graph: &PoseGraph) -> f64 {
+    let mut lengths: Vec<f64> = graph
+        .edges
+        .iter()
+        .map(|e| e.measurement.x.hypot(e.measurement.y))
+        .filter(|l| l.is_finite() && *l > 0.0)
+        .collect();
+    if lengths.is_empty() {
+        return 1.0;
+    }
+    lengths.sort_by(f64::total_cmp);
+    0.5 * lengths[lengths.len() / 2]
+}
+
+/// The entities of a graph under `root`: poses, headings, odometry, loop closures.
+pub fn graph_entities(root: &str, graph: &PoseGraph) -> Vec<Entity> {
+    let positions: Vec<[f32; 2]> = graph.poses.iter().map(|p| point(p.x, p.y)).collect();
+    let length = heading_length(graph);
+    let vectors = graph
+        .poses
+        .iter()
+        .map(|p| point(length * p.theta.cos(), length * p.theta.sin()))
+        .collect();
+    let column = |f: &dyn Fn(&crate::graph::Pose2) -> f64| graph.poses.iter().map(f).collect();
+    let mut entities = vec![
+        Entity::fixed(
+            format!("{root}/poses"),
+            Item::Points {
+                positions: positions.clone(),
+                color: POSE_COLOR,
+                radius: POINT_RADIUS,
+            },
+        )
+        .with(
+            "pose_id",
+            graph.ids.iter().map(|&id| f64::from(id)).collect(),
+        )
+        .with("x", column(&|p| p.x))
+        .with("y", column(&|p| p.y))
+        .with("theta", column(&|p| p.theta)),
+        Entity::fixed(
+            format!("{root}/headings"),
+            Item::Arrows {
+                origins: positions,
+                vectors,
+                color: HEADING_COLOR,
+                radius: LINE_RADIUS,
+            },
+        ),
+    ];
+    for (name, odometry, color) in [
+        ("odometry", true, ODOMETRY_COLOR),
+        ("loop_closures", false, LOOP_CLOSURE_COLOR),
+    ] {
+        let edges: Vec<_> = graph
+            .edges
+            .iter()
+            .filter(|e| is_odometry(graph, e) == odometry)
+            .collect();
+        let strips = edges
+            .iter()
+            .map(|e| {
+                let (a, b) = (graph.poses[e.i], graph.poses[e.j]);
+                [point(a.x, a.y), point(b.x, b.y)]
+            })
+            .collect();
+        entities.push(
+            Entity::fixed(
+                format!("{root}/{name}"),
+                Item::Strips {
+                    strips,
+                    colors: vec![color],
+                    radius: LINE_RADIUS,
+                },
+            )
+            .with(
+                "from",
+                edges.iter().map(|e| f64::from(graph.ids[e.i])).collect(),
+            )
+            .with(
+                "to",
+                edges.iter().map(|e| f64::from(graph.ids[e.j])).collect(),
+            ),
+        );
+    }
+    entities
+}
+
+/// "N poses, M edges (K odometry, L loop closures)".
+pub fn graph_summary(graph: &PoseGraph) -> String {
+    let odometry = graph.edges.iter().filter(|e| is_odometry(graph, e)).count();
+    format!(
+        "{} poses, {} edges ({odometry} odometry, {} loop closures)",
+        graph.num_poses(),
+        graph.edges.len(),
+        graph.edges.len() - odometry
+    )
+}
+
+/// Position of `value` on the residual color scale, in [0, 1]: logarithmic between the smallest
+/// positive residual and the largest (at most twelve decades); zero and below map to 0.
+pub fn residual_position(value: f64, min_positive: f64, max: f64) -> f64 {
+    if !(value > 0.0 && max > min_positive && min_positive > 0.0) {
+        return 0.0;
+    }
+    let lo = min_positive.max(max * 1e-12).log10();
+    let hi = max.log10();
+    ((value.log10() - lo) / (hi - lo)).clamp(0.0, 1.0)
+}
+
+/// The color at position `t` ∈ [0, 1] of [`RESIDUAL_SCALE`], interpolated linearly.
+pub fn scale_color(t: f64) -> Rgb {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let segments = (RESIDUAL_SCALE.len() - 1) as f64;
+    let x = t * segments;
+    let k = (x.floor() as usize).min(RESIDUAL_SCALE.len() - 2);
+    let f = x - k as f64;
+    let (a, b) = (RESIDUAL_SCALE[k], RESIDUAL_SCALE[k + 1]);
+    std::array::from_fn(|c| {
+        (f64::from(a[c]) + f * (f64::from(b[c]) - f64::from(a[c]))).round() as u8
+    })
+}
+
+/// Every edge of `graph`, in input order, colored by its term of the cost f.
+pub fn residual_entity(
+    path: &str,
+    graph: &PoseGraph,
+    weights: &[crate::problem::weights::EdgeWeight],
+) -> Entity {
+    let residuals: Vec<f64> = graph
+        .edges
+        .iter()
+        .zip(weights)
+        .map(|(e, w)| crate::problem::matrix::edge_cost(e, *w, &graph.poses))
+        .collect();
+    let max = residuals.iter().copied().fold(0.0, f64::max);
+    let min_positive = residuals
+        .iter()
+        .copied()
+        .filter(|r| *r > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let colors = residuals
+        .iter()
+        .map(|&r| scale_color(residual_position(r, min_positive, max)))
+        .collect();
+    let strips = graph
+        .edges
+        .iter()
+        .map(|e| {
+            let (a, b) = (graph.poses[e.i], graph.poses[e.j]);
+            [point(a.x, a.y), point(b.x, b.y)]
+        })
+        .collect();
+    Entity::fixed(
+        path,
+        Item::Strips {
+            strips,
+            colors,
+            radius: RESIDUAL_LINE_RADIUS,
+        },
+    )
+    .with(
+        "from",
+        graph
+            .edges
+            .iter()
+            .map(|e| f64::from(graph.ids[e.i]))
+            .collect(),
+    )
+    .with(
+        "to",
+        graph
+            .edges
+            .iter()
+            .map(|e| f64::from(graph.ids[e.j]))
+            .collect(),
+    )
+    .with("residual", residuals)
+}
+
+fn flag(b: bool) -> f64 {
+    if b { 1.0 } else { 0.0 }
+}
+
+/// `report/certificate`: the verdict, the cost and the proven bound.
+pub fn certificate_entity(c: &Certificate) -> Entity {
+    let gap = c.cost - c.lower_bound;
+    let relative = gap / c.cost.abs().max(1.0);
+    let verdict = if c.certified {
+        "certified optimal"
+    } else if c.szep {
+        "NOT certified (the SZEP holds but the bound exceeds the tolerance)"
+    } else {
+        "NOT certified (no SZEP: null-space estimate)"
+    };
+    let text = format!(
+        "{verdict}: cost {}, proven lower bound {}, suboptimality <= {} ({} relative); {} eigenvalue{} of W(lambda*) at zero",
+        num(c.cost),
+        num(c.lower_bound),
+        num(gap),
+        num(relative),
+        c.near_zero,
+        if c.near_zero == 1 { "" } else { "s" }
+    );
+    Entity::fixed(
+        "report/certificate",
+        Item::Text {
+            text,
+            warning: !c.certified,
+        },
+    )
+    .with("cost", vec![c.cost])
+    .with("lower_bound", vec![c.lower_bound])
+    .with("suboptimality_bound", vec![gap])
+    .with("relative_suboptimality_bound", vec![relative])
+    .with("certified", vec![flag(c.certified)])
+    .with("szep", vec![flag(c.szep)])
+    .with("near_zero", vec![c.near_zero as f64])
+}
+
+/// `spectrum/...` and `report/spectrum`.
+pub fn spectrum_entities(s: &Spectrum<'_>) -> Vec<Entity> {
+    let mut text = format!(
+        "SZEP {}: {} eigenvalue{} of W(lambda*) at zero",
+        if s.szep { "holds" } else { "fails" },
+        s.near_zero,
+        if s.near_zero == 1 { "" } else { "s" }
+    );
+    if let Some(bound) = s.lower_bound {
+        text += &format!("; proven lower bound on f*: {}", num(bound));
+    }
+    let mut v: Vec<Entity> = [
+        ("spectrum/eigenvalues", s.eigenvalues),
+        ("spectrum/penalized_eigenvalues", s.penalized_eigenvalues),
+        ("spectrum/rotation_eigenvalues", s.rotation_eigenvalues),
+    ]
+    .into_iter()
+    .map(|(path, values)| Entity::fixed(path, Item::Bars(values.to_vec())))
+    .collect();
+    v.push(
+        Entity::fixed("spectrum/near_zero", Item::Scalar(s.near_zero as f64))
+            .with("szep", vec![flag(s.szep)]),
+    );
+    let mut report = Entity::fixed(
+        "report/spectrum",
+        Item::Text {
+            text,
+            warning: !s.szep,
+        },
+    )
+    .with("near_zero", vec![s.near_zero as f64])
+    .with("szep", vec![flag(s.szep)]);
+    if let Some(bound) = s.lower_bound {
+        report = report.with("lower_bound", vec![bound]);
+    }
+    v.push(report);
+    v
+}
+
+/// An entity path part from a value's name: ASCII letters, digits and `_` kept, others `_`.
+fn path_part(name: &str) -> String {
+    let part: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if part.is_empty() { "_".into() } else { part }
+}
+
+/// `solver/NAME` at `step` of the `iteration` timeline, one per value.
+pub fn iteration_entities(step: u64, values: &[(&str, f64)]) -> Vec<Entity> {
+    values
+        .iter()
+        .map(|&(name, value)| Entity {
+            path: format!("solver/{}", path_part(name)),
+            item: Item::Scalar(value),
+            values: Vec::new(),
+            when: When::Iteration(step),
+        })
+        .collect()
+}
