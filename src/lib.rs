@@ -16,7 +16,8 @@
 //! This crate is the library behind the command-line tools:
 //! - [`io`]: lossless g2o and TORO readers and writers, dialects, precise `PATH:LINE:COL` errors;
 //! - [`graph`]: the data model, kept exactly as read, with a dense index for the numerics;
-//! - [`stats`]: what `pgo-convert --stats` reports;
+//! - [`stats`]: what `pgo-convert --stats` reports (these three are the file layer, the crate
+//!   `pgo-io` in `crates/pgo-io`, re-exported here);
 //! - [`cli`]: the tools' flags and entry points (the binaries in `src/bin/` only call them);
 //! - [`viz`]: what the tools' `--rerun-*` flags record for the rerun viewer (cargo feature
 //!   `rerun`, on by default), with solvers' iterations reported through [`progress`].
@@ -27,9 +28,7 @@ pub mod cli;
 pub mod error;
 pub mod factor;
 pub mod gauss_newton;
-pub mod graph;
 pub mod init;
-pub mod io;
 pub mod manifold;
 pub mod matrix;
 pub mod nullspace;
@@ -40,10 +39,13 @@ pub mod sdp;
 pub mod simulate;
 pub mod spectrum;
 pub mod staircase;
-pub mod stats;
 pub mod subspace;
 pub mod viz;
 pub mod weights;
+
+/// The file layer (crate `pgo-io`): the pose graph as read, the g2o/TORO readers and writers,
+/// statistics.
+pub use pgo_io::{graph, io, stats};
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};

@@ -53,7 +53,7 @@ pub fn check_reader(data: &[u8], name: &str) {
                 let _ = pgo::stats::GraphStats::new(&graph, &report);
                 round_trip(&graph, &options);
             }
-            Err(pgo::Error::Parse(e)) => {
+            Err(pgo_io::Error::Parse(e)) => {
                 let text = e.to_string();
                 let prefix = format!("{name}:{}:{}: ", e.location.line, e.location.col);
                 assert!(text.starts_with(&prefix), "{text}");
