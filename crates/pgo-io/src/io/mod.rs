@@ -10,11 +10,13 @@
 mod block;
 pub mod g2o;
 pub mod lexer;
+mod options;
 mod reader;
 pub mod toro;
 mod writer;
 
-pub use reader::{ReadOptions, ReadReport, read, read_path};
+pub use options::ReadOptions;
+pub use reader::{ReadReport, read, read_path};
 pub use writer::{WriteOptions, format_f64, write, write_path};
 
 use crate::graph::NoiseKind;
