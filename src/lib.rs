@@ -40,8 +40,6 @@ pub mod certify;
 pub mod cli;
 pub mod dual;
 pub mod error;
-pub mod graph;
-pub mod io;
 pub mod linalg;
 pub mod problem;
 pub mod progress;
@@ -50,8 +48,11 @@ pub mod simulate;
 pub mod solve;
 pub mod spectrum;
 pub mod staircase;
-pub mod stats;
 pub mod viz;
+
+/// The file layer (crate `pgo-io`): the pose graph as read, the g2o/TORO readers and writers,
+/// statistics.
+pub use pgo_io::{graph, io, stats};
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};

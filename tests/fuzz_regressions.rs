@@ -1,23 +1,22 @@
 //! Replays the inputs in `tests/fuzz-regressions/TARGET/` through the checks of the fuzz target
 //! TARGET (`tests/oracle/mod.rs`, shared with `fuzz/fuzz_targets/`), so that what a fuzzer once
-//! found stays fixed in plain `cargo test`, without cargo-fuzz. Add a minimized input
+//! found stays fixed in plain `cargo test`, without cargo-fuzz, and through the readers' checks
+//! (those of the reader fuzz targets, `crates/pgo-io/tests/oracle/mod.rs`; the file layer replays
+//! its own inputs in `crates/pgo-io/tests/fuzz-regressions/`). Add a minimized input
 //! (`cargo fuzz tmin`) under its target's directory; see README "Fuzzing".
 
 #[path = "oracle/mod.rs"]
 mod oracle;
+#[path = "../crates/pgo-io/tests/oracle/mod.rs"]
+mod reader_oracle;
 
 use std::path::Path;
 
 /// What a fuzz target runs on an input.
 type Check = fn(&[u8]);
 
-/// The fuzz targets and their checks.
-const TARGETS: [(&str, Check); 4] = [
-    ("read_g2o", |d| oracle::check_reader(d, "fuzz.g2o")),
-    ("read_toro", |d| oracle::check_reader(d, "fuzz.graph")),
-    ("read_auto", |d| oracle::check_reader(d, "fuzz.txt")),
-    ("solve", oracle::check_solve),
-];
+/// The fuzz targets of this package and their checks (the reader targets are pgo-io's).
+const TARGETS: [(&str, Check); 1] = [("solve", oracle::check_solve)];
 
 #[test]
 fn every_fuzz_regression_input_passes_its_targets_checks() {
@@ -42,7 +41,7 @@ fn every_fuzz_regression_input_passes_its_targets_checks() {
             eprintln!("{}", file.display());
             check(&data);
             // The readers' checks run on every input, whatever target found it.
-            oracle::check_reader(&data, "fuzz.txt");
+            reader_oracle::check_reader(&data, "fuzz.txt");
             count += 1;
         }
     }

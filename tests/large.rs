@@ -14,7 +14,7 @@ fn generated(mb: usize) -> String {
     String::from_utf8(out).unwrap()
 }
 
-fn read(text: &str) -> Result<(pgo::PoseGraph, io::ReadReport), pgo::Error> {
+fn read(text: &str) -> Result<(pgo::PoseGraph, io::ReadReport), pgo_io::Error> {
     io::read(text.as_bytes(), "big.g2o", &ReadOptions::default())
 }
 

@@ -3,7 +3,7 @@
 //! general path that also reports what is wrong, with its line and column.
 
 use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
-use super::reader::ReadOptions;
+use super::options::ReadOptions;
 use super::{g2o, toro};
 use crate::error::{Location, ParseError, ParseErrorKind};
 use crate::graph::{Edge, Pose2, SymMat3, VertexId};

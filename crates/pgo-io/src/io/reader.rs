@@ -3,24 +3,12 @@
 //! §7.2), never per tag, noise matrices checked.
 
 use super::block::{Block, EdgeTag, Family, make_error, mixed_tags, parse_block};
+use super::options::ReadOptions;
 use super::{Dialect, Format};
 use crate::error::{Location, ParseError, ParseErrorKind, Warning};
 use crate::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
 use std::collections::HashMap;
 use std::io::Read;
-
-/// How to read a file.
-#[derive(Debug, Clone, Default)]
-pub struct ReadOptions {
-    /// The format; `None`: by extension, else by the first pose tag.
-    pub format: Option<Format>,
-    /// The dialect; `None`: by the edge tags (see [`ReadReport::dialect_reason`]).
-    pub dialect: Option<Dialect>,
-    /// Unknown tags and EQUIV lines are errors instead of warnings.
-    pub strict: bool,
-    /// Accept noise matrices that are not positive definite.
-    pub allow_indefinite: bool,
-}
 
 /// What the reader decided and noticed.
 #[derive(Debug, Clone)]

@@ -10,18 +10,21 @@
 mod block;
 pub mod g2o;
 pub mod lexer;
+mod options;
 mod reader;
 pub mod toro;
 mod writer;
 
-pub use reader::{ReadOptions, ReadReport, read, read_path};
+pub use options::ReadOptions;
+pub use reader::{ReadReport, read, read_path};
 pub use writer::{WriteOptions, format_f64, write, write_path};
 
 use crate::graph::NoiseKind;
 use std::fmt;
 
 /// A file format.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
     /// g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2).
@@ -66,7 +69,8 @@ impl fmt::Display for Format {
 
 /// How the six noise values of an edge line are to be read (FORMATS.md §7.2): their order and
 /// whether they hold an information or a covariance matrix.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Dialect {
     /// Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM's readG2o).

@@ -1,0 +1,128 @@
+//! Typed errors of the file layer. Every input error carries `PATH:LINE:COL` (DESIGN.md §4);
+//! tools print them on stderr and exit with status 2.
+
+use std::fmt;
+use thiserror::Error;
+
+/// A place in an input file: 1-based line and column (columns count bytes after a UTF-8 BOM).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    pub path: String,
+    pub line: usize,
+    pub col: usize,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.path, self.line, self.col)
+    }
+}
+
+/// What is wrong with an input line.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ParseErrorKind {
+    #[error("{tag} takes {expected} fields after the tag ({layout}), found {found}")]
+    FieldCount {
+        tag: String,
+        expected: usize,
+        found: usize,
+        layout: &'static str,
+    },
+    #[error("FIX takes one or more vertex ids, found none")]
+    NoFixIds,
+    #[error("expected a number, found '{token}'{hint}")]
+    NotANumber { token: String, hint: &'static str },
+    #[error("'{token}' is out of the range of a 64-bit float ({what})")]
+    OutOfRange { token: String, what: &'static str },
+    #[error("invalid vertex id '{token}': {reason}")]
+    InvalidId { token: String, reason: &'static str },
+    #[error("vertex {id} is declared twice (first at line {first_line})")]
+    DuplicateVertex { id: u32, first_line: usize },
+    #[error("edge refers to vertex {id}, which no vertex line declares")]
+    UndeclaredVertex { id: u32 },
+    #[error("FIX names vertex {id}, which is not in the graph")]
+    UnknownFixed { id: u32 },
+    #[error("self-loop: edge from vertex {id} to itself")]
+    SelfLoop { id: u32 },
+    #[error(
+        "the {what} matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive; read in dialect {dialect}){hint}; pass --allow-indefinite to accept it"
+    )]
+    NotPositiveDefinite {
+        what: &'static str,
+        pivot: usize,
+        dialect: &'static str,
+        hint: &'static str,
+    },
+    #[error("3D pose graphs are not supported (tag {tag}): pgo handles planar SE(2) graphs")]
+    ThreeD { tag: String },
+    #[error(
+        "landmarks are not supported (tag {tag}): pgo optimizes pose graphs (poses and pose-pose edges) only"
+    )]
+    Landmark { tag: String },
+    #[error(
+        "unary priors are not supported (tag {tag}): pgo fixes the gauge itself; FIX lines are kept"
+    )]
+    Prior { tag: String },
+    #[error(
+        "EQUIV (vertex equivalence) lines are not supported (without --strict they are skipped with a warning)"
+    )]
+    Equiv,
+    #[error("unknown tag '{tag}'")]
+    UnknownTag { tag: String },
+    #[error(
+        "edge tags of both formats in one file ({first} at line {first_line}, {tag} here): pass --dialect to say how to read the information values"
+    )]
+    MixedTags {
+        first: String,
+        first_line: usize,
+        tag: String,
+    },
+}
+
+/// An input error at a location.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("{location}: {kind}")]
+pub struct ParseError {
+    pub location: Location,
+    pub kind: ParseErrorKind,
+}
+
+/// A warning at a location (unknown tags, skipped lines, guesses the reader made).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Warning {
+    pub location: Location,
+    pub message: String,
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: warning: {}", self.location, self.message)
+    }
+}
+
+/// Everything reading and writing can fail with.
+#[derive(Debug, Error)]
+pub enum Error {
+    #[error(transparent)]
+    Parse(#[from] ParseError),
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A request that cannot be carried out (bad combination of flags, unwritable value...).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Error {
+    pub fn io(path: impl Into<String>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
