@@ -1,4 +1,4 @@
-//! Typed errors. Every input error carries `PATH:LINE:COL` (DESIGN.md §4); tools print them on
+//! Typed errors. Every input error carries `PATH:LINE:COL` (docs/method.md §4); tools print them on
 //! stderr and exit with status 2. The input errors and warnings are those of the file layer
 //! (`pgo-io`), re-exported here.
 

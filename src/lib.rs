@@ -13,6 +13,16 @@
 //! graph matrix W(λ) is positive semidefinite bounds f from below, so `cost - lower_bound` is a
 //! proven bound on the suboptimality of the estimate.
 //!
+//! One call solves a graph and says what it proved:
+//!
+//! ```
+//! let (graph, _) = pgo::io::read_path("datasets/MIT.g2o", &Default::default())?;
+//! let solution = pgo::solve(&graph, &pgo::SolveOptions::default())?;
+//! assert!(solution.certified);
+//! println!("{} <= f* <= {}", solution.lower_bound, solution.cost);
+//! # Ok::<(), pgo::Error>(())
+//! ```
+//!
 //! The library behind the command-line tools, in layers; each imports only the layers below it
 //! (ARCHITECTURE.md):
 //!

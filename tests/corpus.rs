@@ -5,7 +5,7 @@
 //! `tests/malformed/cases.tsv`, counted by hand), one line on stderr, nothing on stdout, exit
 //! status 2, and an existing output file is left untouched and no other file appears.
 //!
-//! Tolerated (decided by FORMATS.md §7 and README "Lenient about layout, strict about values"):
+//! Tolerated (decided by docs/formats.md §7.1 and README "Lenient about layout, strict about values"):
 //! CRLF, tabs and runs of spaces, a UTF-8 BOM, no final newline, comments (whole-line and
 //! trailing), blank lines, vertices after edges, FIX first, other spellings of the same numbers
 //! (`+1`, `.5`, `1E0`, `7.`, leading zeros in ids), unknown tags (warning), EQUIV (warning), TORO

@@ -108,7 +108,7 @@ fn every_planar_file_parses_with_the_manifest_counts_and_exact_values() {
             assert_eq!(g.ids, ids, "{}: ids", e.file);
         }
 
-        // Every edge exactly as written, in input order, information mapped per FORMATS.md §3.1.
+        // Every edge exactly as written, in input order, information mapped per docs/formats.md §3.1.
         for (k, ((i, j, z, n), ge)) in naive.edges.iter().zip(&g.edges).enumerate() {
             assert_eq!((g.ids[ge.i], g.ids[ge.j]), (*i, *j), "{}: edge {k}", e.file);
             assert_eq!(

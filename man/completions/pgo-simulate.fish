@@ -5,8 +5,8 @@ complete -c pgo-simulate -l translation-noise -d 'Translation noise e_Delta: gau
 complete -c pgo-simulate -l seed -d 'Seed of the random number generator (any 64-bit unsigned integer)' -r
 complete -c pgo-simulate -l side -d 'Side L of the square the positions are drawn from, in metres' -r
 complete -c pgo-simulate -s o -l output -d 'Output file, or - for stdout' -r
-complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s extension (.g2o, .graph), else g2o]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
-toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s extension (.g2o, .graph), else g2o]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
 complete -c pgo-simulate -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-simulate -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-simulate -s q -l quiet -d 'Do not print the summary line on stderr'

@@ -24,8 +24,8 @@ _pgo-simulate() {
 '--side=[Side L of the square the positions are drawn from, in metres]:L:_default' \
 '-o+[Output file, or - for stdout]:OUT:_default' \
 '--output=[Output file, or - for stdout]:OUT:_default' \
-'--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
-toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '-q[Do not print the summary line on stderr]' \

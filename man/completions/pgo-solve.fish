@@ -1,12 +1,12 @@
-complete -c pgo-solve -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
-toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-solve -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
 complete -c pgo-solve -l dialect -d 'How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]' -r -f -a "g2o\t'Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM\'s readG2o)'
 toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
 toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
 g2o-cov\t'Covariance, g2o order'"
 complete -c pgo-solve -s o -l output -d 'Write the optimized graph here (- for stdout); with --json the graph goes only here' -r
-complete -c pgo-solve -l to -d 'Output format [default: from the output\'s extension, else the input format]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2)'
-toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3)'"
+complete -c pgo-solve -l to -d 'Output format [default: from the output\'s extension, else the input format]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
+toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
 complete -c pgo-solve -l weights -d 'Edge weights: unit (the paper\'s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)' -r -f -a "unit\t'τ = κ = 1: exactly the paper\'s cost (5)/(8)'
 isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)'"
 complete -c pgo-solve -l method -d 'Solution method [auto: sdp for components of at most 100 poses, else staircase]' -r -f -a "auto\t'sdp for components of at most 100 poses, staircase beyond'

@@ -15,16 +15,16 @@ _pgo-solve() {
 
     local context curcontext="$curcontext" state line
     _arguments "${_arguments_options[@]}" : \
-'--from=[Input format \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
-toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'--from=[Input format \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
 '--dialect=[How to read the six noise values of each edge \[default\: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags\]]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
 toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"
 toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D\` as covariances)"
 g2o-cov\:"Covariance, g2o order"))' \
 '-o+[Write the optimized graph here (- for stdout); with --json the graph goes only here]:OUT:_default' \
 '--output=[Write the optimized graph here (- for stdout); with --json the graph goes only here]:OUT:_default' \
-'--to=[Output format \[default\: from the output'\''s extension, else the input format\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (FORMATS.md §2)"
-toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (FORMATS.md §3)"))' \
+'--to=[Output format \[default\: from the output'\''s extension, else the input format\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
+toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
 '--weights=[Edge weights\: unit (the paper'\''s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth\: the SE-Sync/CPL-SLAM objective)]:POLICY:((unit\:"τ = κ = 1\: exactly the paper'\''s cost (5)/(8)"
 isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)"))' \
 '--method=[Solution method \[auto\: sdp for components of at most 100 poses, else staircase\]]:METHOD:((auto\:"sdp for components of at most 100 poses, staircase beyond"

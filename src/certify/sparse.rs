@@ -3,7 +3,7 @@ use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::{c64, cx128, fx128};
 
-/// The sparse certificate of the scalable solver (DESIGN.md §3.2). For a rank-1 estimate the
+/// The sparse certificate of the scalable solver (docs/method.md §3.4). For a rank-1 estimate the
 /// proof is the deflated one of [`SparseCertifier::certify_rank_one`] (LDLᴴ inertia for the gap,
 /// Temple's inequality for the estimate's own eigenvalue), whose loss is set by the estimate's
 /// residual rather than the factorization's rounding. Where that cannot isolate one eigenvalue,

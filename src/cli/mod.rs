@@ -1,6 +1,6 @@
 //! The command-line tools: their flags (clap definitions, also used to generate the man pages) and
 //! their entry points. Exit status: 0 success, 1 a negative answer (e.g. not certified), 2 an
-//! error in the input or the request (DESIGN.md §4).
+//! error in the input or the request (docs/method.md §4).
 
 pub mod certify;
 pub mod common;

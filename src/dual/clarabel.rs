@@ -74,7 +74,7 @@
 //!   tolerances end `AlmostSolved` without improving this.
 //!
 //! Accepted statuses are `Solved` and `AlmostSolved` (clarabel's reduced tolerances, which
-//! DESIGN.md §6 saw on embedded complex problems); any other status is an [`SdpError::Solver`].
+//! docs/method.md §3.1 notes on embedded complex problems); any other status is an [`SdpError::Solver`].
 //! For anything but small graphs, and for accurate λ*, use [`super::ipm`].
 
 use clarabel::algebra::CscMatrix;

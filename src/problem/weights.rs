@@ -1,4 +1,4 @@
-//! Per-edge weights of the cost (DESIGN.md §2): the paper's cost (5)/(8) weighs every edge
+//! Per-edge weights of the cost (docs/method.md §2.2): the paper's cost (5)/(8) weighs every edge
 //! equally; SE-Sync and CPL-SLAM weigh each edge by isotropic precisions taken from its
 //! information matrix Ω = [[Ω_tt, Ω_tθ], [Ω_θt, Ω_θθ]]:
 //!

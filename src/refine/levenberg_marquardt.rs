@@ -1,5 +1,5 @@
 //! Levenberg-Marquardt refinement on SE(2) under each edge's full information matrix: the local
-//! maximum-likelihood estimate g2o computes (DESIGN.md §3.3).
+//! maximum-likelihood estimate g2o computes (docs/method.md §3.3).
 //!
 //! An edge (i, j) with measurement z = (t_z, θ_z) and information Ω has g2o's `EdgeSE2` error
 //!

@@ -1,4 +1,4 @@
-//! Initializations for the scalable solver (DESIGN.md §3.2).
+//! Initializations for the scalable solver (docs/method.md §3.2).
 //!
 //! - Chordal relaxation of the rotations: drop |r_i| = 1 and minimize the rotation part of the
 //!   cost, Σ κ |r_j − R r_i|² = r* Q_κ r with r_0 = 1 (a sparse linear least-squares problem whose

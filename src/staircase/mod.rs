@@ -1,4 +1,4 @@
-//! The scalable certified solver (DESIGN.md §3.2): chordal initialization, Riemannian Newton on
+//! The scalable certified solver (docs/method.md §3.2): chordal initialization, Riemannian Newton on
 //! the rank-1 manifold (|r_i| = 1), the sparse certificate of [`crate::certify::SparseCertifier`],
 //! and, when the certificate fails, the Riemannian staircase in the complex domain (rank p > 1,
 //! unit-norm rows; SE-Sync's scheme with ℂ in place of ℝ²) escaping saddles along a direction of

@@ -96,7 +96,7 @@ pub fn naive_read(bytes: &[u8]) -> Naive {
     g
 }
 
-/// FORMATS.md §3.1, written out independently of the library: TORO -> g2o is
+/// docs/formats.md §3.1, written out independently of the library: TORO -> g2o is
 /// g2o = (T0, T1, T4, T2, T5, T3).
 pub fn toro_to_g2o(t: [f64; 6]) -> [f64; 6] {
     [t[0], t[1], t[4], t[2], t[5], t[3]]

@@ -17,7 +17,7 @@ lines sorted by id, then `EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33` in 
 direction, then at most one `FIX id ...` line. Floats are printed in shortest round-trip form, so
 Python's float() yields exactly the f64 pgo holds, and values are kept as read (no angle wrapping).
 
-Format background: ../shared/formats/FORMATS.md (sections 2, 3 and 5).
+Format background: docs/formats.md (§2, §3 and §5).
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ GTSAM_DIAGONAL_THRESHOLD = 1e-9
 # ---------------------------------------------------------------------------------------------
 
 # Position of the g2o upper-triangle entries (I11 I12 I13 I22 I23 I33) inside a TORO information
-# block (Ixx Ixy Iyy Itt Ixt Iyt); FORMATS.md §3.1: g2o = (T0, T1, T4, T2, T5, T3).
+# block (Ixx Ixy Iyy Itt Ixt Iyt); docs/formats.md §3.1: g2o = (T0, T1, T4, T2, T5, T3).
 TORO_TO_G2O = (0, 1, 4, 2, 5, 3)
 
 
@@ -278,7 +278,7 @@ FORWARD_CASES = [
 ]
 
 # Peer-written files for the reverse direction. GTSAM can only be fed g2o-order files without
-# comments (readG2o reads EDGE2 in g2o order, and a '#' line stops its factor parsing, FORMATS.md
+# comments (readG2o reads EDGE2 in g2o order, and a '#' line stops its factor parsing, docs/formats.md
 # §5.6); g2o needs VERTEX lines (it drops edges to undeclared vertices, so on edges-only files it
 # would write an empty graph).
 GTSAM_REVERSE = ["MIT.g2o", "intel.g2o", "M3500.g2o", "FRH.g2o", "input_INTEL_g2o.g2o",
@@ -291,7 +291,7 @@ G2O_REVERSE = ["MIT.g2o", "intel.g2o", "M3500.g2o", "FRH.g2o", "input_INTEL_g2o.
 # --allow-indefinite to read the peer's file. input_INTEL_g2o.g2o, edge 74->75:
 # 27289611.550657 -24363663.505902 0 21751450.848890 0 1358.565441 has det(xy block) = 5.4e8, but
 # the peers write 2.72896e+07 -2.43637e+07 0 2.17515e+07 0 1358.57, det(xy block) = -1.4e8.
-# (GTSAM itself reads such a file silently: its Cholesky has no success check, FORMATS.md §5.3.)
+# (GTSAM itself reads such a file silently: its Cholesky has no success check, docs/formats.md §5.3.)
 INDEFINITE_AFTER_ROUNDING = {"input_INTEL_g2o.g2o"}
 
 

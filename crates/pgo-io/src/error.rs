@@ -1,4 +1,4 @@
-//! Typed errors of the file layer. Every input error carries `PATH:LINE:COL` (DESIGN.md §4);
+//! Typed errors of the file layer. Every input error carries `PATH:LINE:COL` (docs/method.md §4);
 //! tools print them on stderr and exit with status 2.
 
 use std::fmt;

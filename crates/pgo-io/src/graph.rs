@@ -1,14 +1,14 @@
 //! The pose graph as read from a file: poses, relative-pose measurements, information matrices
 //! and FIX ids, kept exactly as written, plus the dense internal index used by the numerics.
 //!
-//! Conventions (DESIGN.md §2, FORMATS.md §2.3): an edge `(i, j, z)` measures the pose of `j` in the
+//! Conventions (docs/method.md §2.1, docs/formats.md §2.3): an edge `(i, j, z)` measures the pose of `j` in the
 //! frame of `i`, z ≈ x_i⁻¹ · x_j. In the paper's complex notation (eq. (2)-(4)) an edge carries
 //! Δ_ij = dx + i·dy and R_ij = e^{i·dθ}.
 
 use nalgebra::{Isometry2, Matrix3, Vector2};
 
 /// A vertex id as written in the file. g2o stores ids as a signed 32-bit `int` and refuses
-/// negative ones (FORMATS.md §2.3), so the valid range is `0..=2^31 - 1`.
+/// negative ones (docs/formats.md §2.3), so the valid range is `0..=2^31 - 1`.
 pub type VertexId = u32;
 
 /// Largest id g2o, TORO and GTSAM can all read back.
@@ -58,12 +58,12 @@ impl Pose2 {
 pub enum NoiseKind {
     /// Information matrix Ω (inverse covariance), as g2o and TORO define it.
     Information,
-    /// Covariance matrix Σ = Ω⁻¹, as in GTSAM's `.graph` files (FORMATS.md §5.5).
+    /// Covariance matrix Σ = Ω⁻¹, as in GTSAM's `.graph` files (docs/formats.md §5.5).
     Covariance,
 }
 
 /// A symmetric 3x3 matrix over (x, y, θ), stored as its upper triangle in g2o order
-/// `[m00, m01, m02, m11, m12, m22]` (FORMATS.md §2.2). Whether it is an information or a
+/// `[m00, m01, m02, m11, m12, m22]` (docs/formats.md §2.2). Whether it is an information or a
 /// covariance matrix is a property of the graph ([`PoseGraph::noise`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SymMat3(pub [f64; 6]);
@@ -71,12 +71,12 @@ pub struct SymMat3(pub [f64; 6]);
 impl SymMat3 {
     pub const IDENTITY: SymMat3 = SymMat3([1.0, 0.0, 0.0, 1.0, 0.0, 1.0]);
 
-    /// From TORO's order `ff fs ss rr fr sr` = m00 m01 m11 m22 m02 m12 (FORMATS.md §3.1).
+    /// From TORO's order `ff fs ss rr fr sr` = m00 m01 m11 m22 m02 m12 (docs/formats.md §3.1).
     pub fn from_toro(t: [f64; 6]) -> Self {
         SymMat3([t[0], t[1], t[4], t[2], t[5], t[3]])
     }
 
-    /// In TORO's order `ff fs ss rr fr sr` (FORMATS.md §3.1: TORO = (G0, G1, G3, G5, G2, G4)).
+    /// In TORO's order `ff fs ss rr fr sr` (docs/formats.md §3.1: TORO = (G0, G1, G3, G5, G2, G4)).
     pub fn to_toro(self) -> [f64; 6] {
         let g = self.0;
         [g[0], g[1], g[3], g[5], g[2], g[4]]
@@ -451,7 +451,7 @@ mod tests {
         // TORO writes ff fs ss rr fr sr = m00 m01 m11 m22 m02 m12.
         assert_eq!(g2o.to_toro(), [0.0, 1.0, 11.0, 22.0, 2.0, 12.0]);
         assert_eq!(SymMat3::from_toro(g2o.to_toro()), g2o);
-        // The diagonal example of FORMATS.md §3.1: g2o `a 0 0 b 0 c` is TORO `a 0 b c 0 0`.
+        // The diagonal example of docs/formats.md §3.1: g2o `a 0 0 b 0 c` is TORO `a 0 b c 0 0`.
         assert_eq!(
             SymMat3([3.0, 0.0, 0.0, 4.0, 0.0, 5.0]).to_toro(),
             [3.0, 0.0, 4.0, 5.0, 0.0, 0.0]
@@ -461,7 +461,7 @@ mod tests {
     #[test]
     fn positive_definiteness() {
         assert_eq!(SymMat3::IDENTITY.check_positive_definite(), Ok(()));
-        // FORMATS.md §2.2's examples that g2o loads without complaint.
+        // docs/formats.md §2.2's examples that g2o loads without complaint.
         assert_eq!(
             SymMat3([1.0, -2.0, 0.0, -1.0, 0.0, 1.0]).check_positive_definite(),
             Err(1)

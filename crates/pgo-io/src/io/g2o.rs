@@ -1,4 +1,4 @@
-//! The g2o 2D format (FORMATS.md §2): `VERTEX_SE2 id x y θ`,
+//! The g2o 2D format (docs/formats.md §2): `VERTEX_SE2 id x y θ`,
 //! `EDGE_SE2 i j dx dy dθ I11 I12 I13 I22 I23 I33` (information, upper triangle row by row) and
 //! `FIX id ...`.
 
@@ -9,7 +9,7 @@ pub const EDGE: &str = "EDGE_SE2";
 /// Gauge-fixing line; several ids per line, anywhere in the file.
 pub const FIX: &str = "FIX";
 
-/// g2o tags of 3D types (FORMATS.md §2.6), rejected with a specific message.
+/// g2o tags of 3D types (docs/formats.md §2.6), rejected with a specific message.
 pub const THREE_D: &[&str] = &[
     "VERTEX_SE3:QUAT",
     "EDGE_SE3:QUAT",
@@ -24,7 +24,7 @@ pub const THREE_D: &[&str] = &[
     "EDGE_POINTXYZ_PRIOR",
 ];
 
-/// g2o tags of 2D landmark types (FORMATS.md §2.1).
+/// g2o tags of 2D landmark types (docs/formats.md §2.1).
 pub const LANDMARK: &[&str] = &[
     "VERTEX_XY",
     "EDGE_SE2_XY",

@@ -1,5 +1,5 @@
 //! Line lexer shared by the g2o and TORO readers: whitespace-separated fields with their columns,
-//! strict numbers and ids (FORMATS.md §1, §7).
+//! strict numbers and ids (docs/formats.md §1, §7.1).
 //!
 //! Numbers follow the syntax C++ `operator>>` accepts (`1`, `-0.5`, `+0`, `.5`, `5.`, `1e-7`,
 //! `1E+06`), which is what g2o, TORO and GTSAM read; everything they cannot read back (`nan`,
@@ -255,7 +255,7 @@ fn not_a_number(field: &Field) -> ParseErrorKind {
     }
 }
 
-/// A vertex id: a decimal integer in `0..=2^31 - 1` (g2o's `int`, FORMATS.md §2.3).
+/// A vertex id: a decimal integer in `0..=2^31 - 1` (g2o's `int`, docs/formats.md §2.3).
 pub fn parse_id(field: &Field) -> Result<VertexId, ParseErrorKind> {
     let text = field.text;
     let mut rest = text;

@@ -1,7 +1,7 @@
 //! Reading and writing planar pose graphs in the g2o and TORO text formats, losslessly.
 //!
 //! How the established tools read and write these files, quirks included, is recorded in
-//! `FORMATS.md`; this module follows its §7 recommendations: lenient about layout (comments, blank
+//! `docs/formats.md`; this module follows its §7 recommendations: lenient about layout (comments, blank
 //! lines, CRLF, tabs, runs of spaces, a BOM, no final newline, vertices after edges), strict about
 //! values (every number finite and exactly representable, every id a valid `int`), loud about
 //! anything it skips, and exact on output (shortest round-trip floats, so g2o -> TORO -> g2o
@@ -27,9 +27,9 @@ use std::fmt;
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
-    /// g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (FORMATS.md §2).
+    /// g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2).
     G2o,
-    /// TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (FORMATS.md §3).
+    /// TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3).
     Toro,
 }
 
@@ -67,7 +67,7 @@ impl fmt::Display for Format {
     }
 }
 
-/// How the six noise values of an edge line are to be read (FORMATS.md §7.2): their order and
+/// How the six noise values of an edge line are to be read (docs/formats.md §7.2): their order and
 /// whether they hold an information or a covariance matrix.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]

@@ -1,5 +1,5 @@
 //! The reader shared by g2o and TORO files: the input in chunks (parsed by [`super::block`]),
-//! then the graph assembled from them: ids resolved, the dialect decided per file (FORMATS.md
+//! then the graph assembled from them: ids resolved, the dialect decided per file (docs/formats.md
 //! §7.2), never per tag, noise matrices checked.
 
 use super::block::{Block, EdgeTag, Family, make_error, mixed_tags, parse_block};
@@ -347,7 +347,7 @@ impl<'o> Reader<'o> {
     /// The dialect: the flag if given; else g2o for `EDGE_SE2` tags and toro-info for
     /// `EDGE2`/`EDGE` tags, except that TORO-tagged files whose information matrices are all
     /// positive definite in g2o order but not all in TORO order are read in g2o order, with a
-    /// warning (GTSAM's w20000.txt is such a file, FORMATS.md §8). Files without edges take their
+    /// warning (GTSAM's w20000.txt is such a file, docs/formats.md §8). Files without edges take their
     /// format's dialect.
     fn decide_dialect(&self, format: Format, warnings: &mut Vec<Warning>) -> (Dialect, String) {
         if let Some(d) = self.options.dialect {

@@ -1,4 +1,4 @@
-//! The TORO 2D format (FORMATS.md §3): `VERTEX2 id x y θ` (or `VERTEX`),
+//! The TORO 2D format (docs/formats.md §3): `VERTEX2 id x y θ` (or `VERTEX`),
 //! `EDGE2 i j dx dy dθ ff fs ss rr fr sr` (or `EDGE`; information in TORO's order, see
 //! [`crate::graph::SymMat3::from_toro`]) and `EQUIV a b` (vertex merging, unsupported).
 
@@ -12,7 +12,7 @@ pub const VERTEX_TAGS: &[&str] = &["VERTEX2", "VERTEX"];
 pub const EDGE_TAGS: &[&str] = &["EDGE2", "EDGE"];
 /// Vertex equivalence (merge) constraint, as in GTSAM's w100.graph.
 pub const EQUIV: &str = "EQUIV";
-/// 3D tags (FORMATS.md §3.4).
+/// 3D tags (docs/formats.md §3.4).
 pub const THREE_D: &[&str] = &["VERTEX3", "EDGE3"];
-/// Landmark tags of GTSAM's TORO-like files (FORMATS.md §5.2).
+/// Landmark tags of GTSAM's TORO-like files (docs/formats.md §5.2, §9.1).
 pub const LANDMARK: &[&str] = &["BR", "LANDMARK", "LANDMARK2", "VERTEX_POINT2"];

@@ -1,6 +1,6 @@
-//! Writers for both formats (FORMATS.md §7, "Writing"): vertices first, sorted by id, isolated
+//! Writers for both formats (docs/formats.md §7.3): vertices first, sorted by id, isolated
 //! ones included; edges in input order; the FIX ids as one line at the end, where GTSAM's reader
-//! tolerates it (FORMATS.md §5.6); every float in shortest round-trip form, never NaN or inf.
+//! tolerates it (docs/formats.md §5.6); every float in shortest round-trip form, never NaN or inf.
 
 use super::{Dialect, Format, g2o, toro};
 use crate::error::Error;
