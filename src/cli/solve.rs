@@ -244,17 +244,24 @@ fn text_report(input: &str, report: &Report) -> String {
         } else {
             let used = |k| r.components.iter().any(|c| c.rounding == Some(k));
             format!(
-                "NOT certified: {}; the bound above still holds",
+                "NOT certified: {}, polished under f; the bound above still holds",
                 if used(Rounding::SpanningTree) {
                     "spanning-tree estimate (a forest, f* = 0, whose relaxation rounded above it)"
+                } else if used(Rounding::Randomized) {
+                    "randomized rounding of X* (So, Zhang and Ye 2007)"
+                } else if used(Rounding::SdpRank1) {
+                    "rank-1 rounding of X* (Sec. 6)"
                 } else if used(Rounding::Eigenvector) {
-                    "eigenvector estimate (Sec. 5.2: the null-space method (46) had no solution)"
+                    "eigenvector estimate (Eig, Sec. 5.2)"
                 } else {
                     "null-space estimate (Sec. 5.2)"
                 }
             )
         },
     );
+    if let Some(why) = &r.not_certified_because {
+        out += &row("why not certified", why.clone());
+    }
     if let Some(chi2) = r.refined_chi2 {
         let before: f64 = r.components.iter().filter_map(|c| c.certified_chi2).sum();
         out += &row(

@@ -22,6 +22,9 @@ pub enum Rounding {
     /// tree. Taken where the rounding of the relaxation ends above it, which happens when the
     /// weights span more than double precision resolves (κ 1e17 next to τ 1).
     SpanningTree,
+    /// Randomized rounding of X*: ξ ~ CN(0, X*), r_i = ξ_i/|ξ_i| (So, Zhang and Ye 2007), then
+    /// polished under f (`pgo::solve`, where the SZEP fails).
+    Randomized,
 }
 
 /// Poses from (unnormalized) rotation entries: each rotation normalized to unit modulus, the

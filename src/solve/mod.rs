@@ -7,6 +7,7 @@
 //! May use: every room below it ([`crate::staircase`], [`crate::dual`], [`crate::certify`],
 //! [`crate::refine`], [`crate::problem`], [`crate::progress`]); nothing of `viz` or `cli`.
 
+mod best;
 mod estimate;
 
 pub use estimate::{CertifyOptions, EstimateComponent, EstimateReport, certify_estimate};
@@ -17,7 +18,8 @@ use crate::dual::solver::SdpSolver;
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
 use crate::problem::checks::check_edge_terms;
-use crate::problem::weights::{Weights, edge_weights};
+use crate::problem::matrix::cost;
+use crate::problem::weights::{EdgeWeight, Weights, edge_weights};
 use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_graph};
 use serde::Serialize;
 
@@ -45,6 +47,11 @@ impl Method {
 
 /// Components up to this size go to the SDP under [`Method::Auto`].
 pub const AUTO_SDP_MAX_POSES: usize = 100;
+
+/// Under [`Method::Auto`], a component of more than [`AUTO_SDP_MAX_POSES`] poses that the
+/// staircase does not certify also takes Algorithm 1 up to this size (the dense SDP's time grows
+/// as n³).
+pub const AUTO_SECOND_SDP_MAX_POSES: usize = 200;
 
 /// What [`solve`] is asked for.
 #[derive(Debug, Clone, Copy)]
@@ -118,6 +125,10 @@ pub struct ComponentReport {
     pub refined_chi2: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refine_iterations: Option<usize>,
+    /// Why the component is not certified (absent when it is): the SZEP fails, the SDP stalled,
+    /// the staircase reached its rank or iteration limit, or the gap exceeds the tolerance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_certified_because: Option<String>,
 }
 
 /// The solved graph: the estimate and, per component and summed, its cost, the proven lower bound
@@ -141,6 +152,10 @@ pub struct Solution {
     /// suboptimality_bound / max(1, |cost|).
     pub relative_suboptimality_bound: f64,
     pub certified: bool,
+    /// Why not certified (absent when certified): the reasons of the components that are not,
+    /// "; "-separated, each prefixed with its first id when there are several components.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_certified_because: Option<String>,
     pub szep: bool,
     pub near_zero_eigenvalues: usize,
     /// Whether the SDP solver reached its tolerance on every component.
@@ -161,28 +176,64 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
     }
     let mut components = Vec::new();
     let mut estimate = graph.poses.clone();
+    let staircase = StaircaseOptions {
+        tolerance: options.tolerance,
+        ..Default::default()
+    };
     for (part, members, _) in graph.components() {
         let weights = edge_weights(&part, options.weights)?;
+        let n = part.num_poses();
         let sdp = match options.method {
             Method::Sdp => true,
             Method::Staircase => false,
-            Method::Auto => part.num_poses() <= AUTO_SDP_MAX_POSES,
+            Method::Auto => n <= AUTO_SDP_MAX_POSES,
         };
-        let (mut report, mut poses) = if sdp {
-            let solution = algorithm1::solve_connected(&part, &weights, options.solver)?;
-            (
-                sdp_report(&part, &solution, options.tolerance),
-                solution.poses,
-            )
-        } else {
+        let run_sdp = || algorithm1::solve_connected(&part, &weights, options.solver);
+        let run_staircase = || -> crate::Result<(StaircaseSolution, Vec<Pose2>)> {
             check_edge_terms(&part, &weights, &weights)?;
-            let staircase = StaircaseOptions {
-                tolerance: options.tolerance,
-                ..Default::default()
+            solve_graph(&part, &weights, &staircase, &mut report_step())
+                .ok_or_else(|| Error::Invalid("the graph is not connected".into()))
+        };
+        // The first method as chosen; where it certifies, its result as it is.
+        let mut algorithm1 = None;
+        let mut scalable = None;
+        if sdp {
+            algorithm1 = Some(run_sdp()?);
+        } else {
+            scalable = Some(run_staircase()?);
+        }
+        let first = match (&algorithm1, &scalable) {
+            (Some(a), _) => sdp_report(&part, a, options.tolerance),
+            (_, Some((s, _))) => staircase_report(&part, s, options.tolerance),
+            _ => unreachable!("one method ran"),
+        };
+        let (mut report, mut poses) = if first.certified {
+            let poses = match (algorithm1, scalable) {
+                (Some(a), _) => a.poses,
+                (_, Some((_, p))) => p,
+                _ => unreachable!("one method ran"),
             };
-            let (solution, poses) = solve_graph(&part, &weights, &staircase, &mut report_step())
-                .ok_or_else(|| Error::Invalid("the graph is not connected".into()))?;
-            (staircase_report(&part, &solution, options.tolerance), poses)
+            (first, poses)
+        } else {
+            // Not certified: under auto the other method too (Algorithm 1 up to
+            // AUTO_SECOND_SDP_MAX_POSES poses), every rounding polished, the lowest f kept and
+            // the highest proven bound.
+            if options.method == Method::Auto {
+                if scalable.is_none() {
+                    scalable = Some(run_staircase()?);
+                } else if n <= AUTO_SECOND_SDP_MAX_POSES {
+                    algorithm1 = Some(run_sdp()?);
+                }
+            }
+            best_of(
+                &part,
+                &weights,
+                first,
+                algorithm1.as_ref(),
+                scalable.as_ref(),
+                options.tolerance,
+                &staircase,
+            )
         };
         if options.refine {
             let refined = crate::refine::refine(&part, &poses, &Default::default())?;
@@ -214,6 +265,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
             .then(|| components.iter().filter_map(|c| c.refined_chi2).sum()),
         relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
         certified: components.iter().all(|c| c.certified),
+        not_certified_because: reasons(&components),
         szep: components.iter().all(|c| c.szep),
         near_zero_eigenvalues: components.iter().map(|c| c.near_zero_eigenvalues).sum(),
         sdp_converged: components.iter().all(|c| c.sdp_converged != Some(false)),
@@ -269,6 +321,7 @@ fn sdp_report(part: &PoseGraph, s: &ComponentSolution, tolerance: f64) -> Compon
         certified_chi2: None,
         refined_chi2: None,
         refine_iterations: None,
+        not_certified_because: None,
     }
 }
 
@@ -296,5 +349,127 @@ fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tolerance: f64) -> 
         certified_chi2: None,
         refined_chi2: None,
         refine_iterations: None,
+        not_certified_because: None,
     }
+}
+
+/// The components' reasons for not being certified (see [`Solution::not_certified_because`]).
+fn reasons(components: &[ComponentReport]) -> Option<String> {
+    let several = components.len() > 1;
+    let all: Vec<String> = components
+        .iter()
+        .filter_map(|c| {
+            let why = c.not_certified_because.as_ref()?;
+            Some(if several {
+                format!("component at id {}: {why}", c.first_id)
+            } else {
+                why.clone()
+            })
+        })
+        .collect();
+    (!all.is_empty()).then(|| all.join("; "))
+}
+
+/// Why neither method certified: what each one that ran reports.
+fn reason(
+    algorithm1: Option<&ComponentSolution>,
+    scalable: Option<&(StaircaseSolution, Vec<Pose2>)>,
+    staircase: &StaircaseOptions,
+) -> String {
+    let mut why = Vec::new();
+    if let Some(a) = algorithm1 {
+        if !a.dual.converged {
+            why.push("SDP stalled".to_string());
+        }
+        if !a.szep {
+            why.push(format!(
+                "SZEP fails: {} near-zero eigenvalues of W(lambda*)",
+                a.near_zero
+            ));
+        }
+    }
+    if let Some((s, _)) = scalable {
+        if algorithm1.is_none()
+            && let Some(k) = s.near_zero.filter(|&k| k > 1)
+        {
+            why.push(format!(
+                "SZEP fails: {k} near-zero eigenvalues of W(lambda)"
+            ));
+        }
+        if s.bound.is_none() {
+            why.push(format!("staircase: no certificate up to rank {}", s.rank));
+        }
+        if s.rank >= staircase.max_rank {
+            why.push(format!("staircase: rank limit {}", staircase.max_rank));
+        }
+    }
+    if why.is_empty() {
+        why.push("the gap to the bound exceeds the tolerance".to_string());
+    }
+    why.join("; ")
+}
+
+/// The lowest-cost estimate of every polished rounding of the methods that ran (see
+/// [`best`]), with the highest of their proven bounds (both bound the same f*, of the same
+/// weights); certified if that bound proves the estimate returned within `tolerance`.
+fn best_of(
+    part: &PoseGraph,
+    weights: &[EdgeWeight],
+    first: ComponentReport,
+    algorithm1: Option<&ComponentSolution>,
+    scalable: Option<&(StaircaseSolution, Vec<Pose2>)>,
+    tolerance: f64,
+    staircase: &StaircaseOptions,
+) -> (ComponentReport, Vec<Pose2>) {
+    let from_staircase = scalable.map(|(_, poses)| best::Candidate {
+        poses: poses.clone(),
+        cost: cost(part, weights, poses),
+        rounding: None,
+    });
+    let from_sdp = algorithm1
+        .map(|a| best::sdp_candidates(part, weights, a, staircase))
+        .unwrap_or_default();
+    let mut candidates = Vec::new();
+    if first.method == Method::Sdp {
+        candidates.extend(from_sdp);
+        candidates.extend(from_staircase);
+    } else {
+        candidates.extend(from_staircase);
+        candidates.extend(from_sdp);
+    }
+    let winner = candidates.swap_remove(best::lowest(&candidates));
+    let mut report = match (winner.rounding, algorithm1, scalable) {
+        (Some(_), Some(a), _) => sdp_report(part, a, tolerance),
+        (_, _, Some((s, _))) => staircase_report(part, s, tolerance),
+        _ => first,
+    };
+    if let Some(a) = algorithm1 {
+        report.penalized_eigenvalues = Some(a.eigenvalues.iter().take(4).copied().collect());
+        report.sdp_iterations = Some(a.dual.iterations);
+        report.sdp_converged = Some(a.dual.converged);
+        report.szep = a.szep;
+        report.near_zero_eigenvalues = a.near_zero;
+    }
+    if let Some((s, _)) = scalable {
+        report.rank = Some(s.rank);
+        report.iterations = Some(s.iterations);
+        report.eta = s.bound.map(|b| b.eta);
+    }
+    if winner.rounding.is_some() {
+        report.method = Method::Sdp;
+        report.rounding = winner.rounding;
+        report.gradient_norm = None;
+    }
+    let lower_bound = algorithm1
+        .map(|a| a.lower_bound)
+        .into_iter()
+        .chain(scalable.map(|(s, _)| s.lower_bound))
+        .fold(0.0f64, f64::max);
+    report.cost = winner.cost;
+    report.lower_bound = lower_bound;
+    report.suboptimality_bound = winner.cost - lower_bound;
+    report.certified = within(report.suboptimality_bound, winner.cost, tolerance);
+    report.not_certified_because =
+        (!report.certified).then(|| reason(algorithm1, scalable, staircase));
+    (report, winner.poses)
 }
