@@ -115,6 +115,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         weights: args.weights.weights,
         tolerance: args.tol,
         refine: args.refine,
+        ..Default::default()
     };
     let t1 = Instant::now();
     let solution = rec.observe(|| solve(&graph, &options))?;

@@ -66,6 +66,11 @@ pub struct SolveOptions {
     /// Levenberg-Marquardt under the full information matrices after the certified solve (the
     /// estimate then differs from the certified one: see [`Solution::refined_chi2`]).
     pub refine: bool,
+    /// The staircase's largest rank ([`StaircaseOptions::max_rank`], default 6).
+    pub max_rank: usize,
+    /// The staircase's Newton iterations above rank 1, all ranks together
+    /// ([`StaircaseOptions::max_staircase_iterations`], default 100).
+    pub max_staircase_iterations: usize,
 }
 
 impl Default for SolveOptions {
@@ -76,6 +81,8 @@ impl Default for SolveOptions {
             weights: Weights::Isotropic,
             tolerance: 1e-6,
             refine: false,
+            max_rank: StaircaseOptions::default().max_rank,
+            max_staircase_iterations: StaircaseOptions::default().max_staircase_iterations,
         }
     }
 }
@@ -178,6 +185,8 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
     let mut estimate = graph.poses.clone();
     let staircase = StaircaseOptions {
         tolerance: options.tolerance,
+        max_rank: options.max_rank,
+        max_staircase_iterations: options.max_staircase_iterations,
         ..Default::default()
     };
     for (part, members, _) in graph.components() {
@@ -398,6 +407,12 @@ fn reason(
         }
         if s.bound.is_none() {
             why.push(format!("staircase: no certificate up to rank {}", s.rank));
+        }
+        if s.limit_reached {
+            why.push(format!(
+                "staircase: iteration limit {} reached",
+                staircase.max_staircase_iterations
+            ));
         }
         if s.rank >= staircase.max_rank {
             why.push(format!("staircase: rank limit {}", staircase.max_rank));

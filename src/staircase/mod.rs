@@ -58,6 +58,11 @@ pub struct StaircaseOptions {
     pub max_iterations: usize,
     /// The largest rank of the staircase.
     pub max_rank: usize,
+    /// Newton iterations of the staircase above rank 1, all ranks together, at most (each one is
+    /// a sparse factorization, whose fill grows with long loop closures: on a graph with many
+    /// false ones the staircase ran for minutes). Past it the staircase stops and reports the
+    /// best estimate and bound it reached, with [`StaircaseSolution::limit_reached`].
+    pub max_staircase_iterations: usize,
 }
 
 impl Default for StaircaseOptions {
@@ -66,6 +71,7 @@ impl Default for StaircaseOptions {
             tolerance: 1e-6,
             max_iterations: 200,
             max_rank: 6,
+            max_staircase_iterations: 100,
         }
     }
 }
@@ -108,6 +114,8 @@ pub struct StaircaseSolution {
     /// (Prop. 10) as far as double precision can tell. `None` if the
     /// LDLᴴ met a zero pivot.
     pub near_zero: Option<usize>,
+    /// Whether the staircase stopped at [`StaircaseOptions::max_staircase_iterations`].
+    pub limit_reached: bool,
 }
 
 /// The problem of a connected graph anchored at a chosen pose (the pose whose position is fixed
@@ -557,18 +565,33 @@ pub fn solve_from(
     let mut best = local.clone();
     let mut rank = 1;
     let mut escape_factor: Option<SparseFactor<c64>> = None;
+    let start_iterations = iterations;
+    let mut limit_reached = false;
+    // The Newton iterations left of the staircase's budget, as per-call limits.
+    let budget = |used: usize| StaircaseOptions {
+        max_iterations: options.max_iterations.min(
+            options
+                .max_staircase_iterations
+                .saturating_sub(used - start_iterations),
+        ),
+        ..*options
+    };
     while rank < options.max_rank {
+        if iterations - start_iterations >= options.max_staircase_iterations {
+            limit_reached = true;
+            break;
+        }
         let Some(next) = escape(problem, &local, &mut certifier, &mut escape_factor) else {
             break;
         };
         rank += 1;
-        local = optimize(problem, None, next, options, observer);
+        local = optimize(problem, None, next, &budget(iterations), observer);
         iterations += local.iterations;
         let polished = optimize(
             problem,
             positions.as_mut(),
             round_to_rank_one(problem, &local.point),
-            options,
+            &budget(iterations),
             observer,
         );
         iterations += polished.iterations;
@@ -595,7 +618,7 @@ pub fn solve_from(
     if rank > 1 {
         let tight = StaircaseOptions {
             tolerance: 0.0,
-            ..*options
+            ..budget(iterations)
         };
         let relaxed = optimize_to(problem, None, local.point.clone(), &tight, observer, 1e-12);
         iterations += relaxed.iterations;
@@ -613,7 +636,8 @@ pub fn solve_from(
     // at rank p, it is the closest to λ* (the estimate's own λ may be strictly feasible, its
     // eigenvalues lifted off zero by its distance from λ*).
     let own_lambda = best.lambda.clone();
-    finish(
+    limit_reached |= iterations - start_iterations >= options.max_staircase_iterations;
+    let mut solution = finish(
         best,
         bound,
         Some(relaxed_lambda.as_deref().unwrap_or(&own_lambda)),
@@ -621,7 +645,9 @@ pub fn solve_from(
         iterations,
         &mut certifier,
         options,
-    )
+    );
+    solution.limit_reached = limit_reached;
+    solution
 }
 
 /// The solution, with the near-zero eigenvalue count: the deflated proof's (one, proven) or the
@@ -652,6 +678,7 @@ fn finish(
         gradient_norm: local.gradient_norm,
         factorizations: certifier.factorizations,
         near_zero,
+        limit_reached: false,
     }
 }
 
