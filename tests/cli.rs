@@ -33,7 +33,7 @@ fn unknown_tags_warn_and_are_errors_when_strict() {
     let dir = Dir::new();
     let input = dir.file(
         "in.g2o",
-        format!("{V}FOO 1 2\nEDGE_SE2 0 1 1 0 0 {INFO}\nFOO 3\nEQUIV 0 1\n").as_bytes(),
+        format!("{V}FOO 1 2\nEDGE_SE2 0 1 1 0 0 {INFO}\nFOO 3\n").as_bytes(),
     );
     let out = run(&[s(&input), "-q"], None);
     assert_eq!(out.status.code(), Some(0));
@@ -45,7 +45,6 @@ fn unknown_tags_warn_and_are_errors_when_strict() {
         )),
         "{err}"
     );
-    assert!(err.contains(":6:1: warning: EQUIV"), "{err}");
     let out = run(&[s(&input), "--strict"], None);
     assert_eq!(out.status.code(), Some(2));
     assert!(
@@ -269,4 +268,70 @@ fn writing_to_a_fifo_writes_through_it() {
         let meta = std::fs::symlink_metadata(&fifo).unwrap();
         assert!(meta.file_type().is_fifo(), "{tool} replaced the FIFO");
     }
+}
+
+/// TORO's EQUIV (merge two vertices) is not implemented: every tool refuses it at its line unless
+/// --ignore-equiv is given, and then the warning says what was skipped, also in the JSON reports
+/// (whose verdict is for the graph without the EQUIV lines).
+#[test]
+fn equiv_lines_are_refused_unless_ignored_on_request() {
+    let dir = Dir::new();
+    let input = dir.file(
+        "w.graph",
+        b"VERTEX2 0 0 0 0\nVERTEX2 1 1 0 0\nVERTEX2 2 2 0 0\nEDGE2 0 1 1 0 0 1 0 1 1 0 0\n\
+          EDGE2 1 2 1 0 0 1 0 1 1 0 0\nEQUIV 0 2\nEQUIV 1 2\n",
+    );
+    for tool in ["pgo-solve", "pgo-certify", "pgo-spectrum", "pgo-convert"] {
+        let out = common::run_with_stdin(tool, &[s(&input)], None);
+        assert_eq!(out.status.code(), Some(2), "{tool}");
+        let err = text(&out.stderr);
+        assert!(
+            err.starts_with(&format!("{}:6:1: error: EQUIV", s(&input))),
+            "{tool}: {err}"
+        );
+        assert!(err.contains("--ignore-equiv"), "{tool}: {err}");
+        assert!(out.stdout.is_empty(), "{tool}");
+        // Skipping them and being strict contradict each other.
+        let out = common::run_with_stdin(tool, &[s(&input), "--ignore-equiv", "--strict"], None);
+        assert_eq!(out.status.code(), Some(2), "{tool}");
+    }
+    let warning = format!(
+        "{}:6:1: warning: EQUIV (vertex equivalence) is not supported: 2 lines skipped (first here); the graph is read without them",
+        s(&input)
+    );
+    for tool in ["pgo-solve", "pgo-certify", "pgo-spectrum"] {
+        let out = common::run_with_stdin(tool, &[s(&input), "--ignore-equiv", "--json"], None);
+        // pgo-certify: the file's own vertices are optimal (a chain fits exactly).
+        assert_eq!(out.status.code(), Some(0), "{tool}: {}", text(&out.stderr));
+        assert!(text(&out.stderr).starts_with(&warning), "{tool}");
+        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(r["warnings"], serde_json::json!([warning]), "{tool}");
+        assert_eq!(r["poses"], 3, "{tool}");
+    }
+    // Without warnings, no `warnings` field.
+    let clean = dir.file(
+        "clean.g2o",
+        format!("{V}EDGE_SE2 0 1 1 0 0 {INFO}\n").as_bytes(),
+    );
+    let out = common::run_with_stdin("pgo-solve", &[s(&clean), "--json", "-o", "-"], None);
+    let json = text(&out.stdout).lines().last().unwrap().to_string();
+    let r: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(r.get("warnings").is_none(), "{r}");
+}
+
+/// A graph without poses is an error of the library entries too (the readers never give one).
+#[test]
+fn the_library_refuses_an_empty_graph() {
+    let empty = pgo::PoseGraph::with_edges(vec![], vec![]);
+    let err = pgo::solve::solve(&empty, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("no poses"), "{err}");
+    let err = pgo::solve::certify_estimate(&empty, &[], &Default::default(), "x").unwrap_err();
+    assert!(err.to_string().contains("no poses"), "{err}");
+    let options = pgo::spectrum::SpectrumOptions {
+        weights: pgo::problem::weights::Weights::Unit,
+        count: 0,
+        solver: pgo::dual::solver::SdpSolver::Ipm,
+    };
+    let err = pgo::spectrum::spectrum(&empty, &options).unwrap_err();
+    assert!(err.to_string().contains("no poses"), "{err}");
 }

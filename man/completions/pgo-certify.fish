@@ -10,7 +10,8 @@ isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync an
 complete -c pgo-certify -l tol -d 'Relative suboptimality bound under which the estimate is called certified' -r
 complete -c pgo-certify -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-certify -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
-complete -c pgo-certify -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
+complete -c pgo-certify -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
+complete -c pgo-certify -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-certify -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-certify -l json -d 'Print the report as one JSON object on stdout'
 complete -c pgo-certify -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'

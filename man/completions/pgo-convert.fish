@@ -14,7 +14,8 @@ g2o-cov\t'Covariance, g2o order'"
 complete -c pgo-convert -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-convert -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-convert -l reindex -d 'Renumber vertices 0..n-1 in ascending order of their ids'
-complete -c pgo-convert -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
+complete -c pgo-convert -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
+complete -c pgo-convert -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph written is the file\'s without them (--stats always skips them with a warning)'
 complete -c pgo-convert -l allow-indefinite -d 'Accept noise matrices that are not positive definite'
 complete -c pgo-convert -l stats -d 'Print statistics (poses, edges, odometry and loop closures, components, ids, duplicates) instead of converting'
 complete -c pgo-convert -l json -d 'With --stats: one JSON object on stdout'

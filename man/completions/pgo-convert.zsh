@@ -32,7 +32,8 @@ g2o-cov\:"Covariance, g2o order"))' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--reindex[Renumber vertices 0..n-1 in ascending order of their ids]' \
-'--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
+'--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
+'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph written is the file'\''s without them (--stats always skips them with a warning)]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite]' \
 '--stats[Print statistics (poses, edges, odometry and loop closures, components, ids, duplicates) instead of converting]' \
 '--json[With --stats\: one JSON object on stdout]' \

@@ -35,7 +35,8 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--tol=[Relative suboptimality bound under which the result is called certified]:REL:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
-'--strict[Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning]' \
+'--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
+'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, and chi2 before and after is added]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \

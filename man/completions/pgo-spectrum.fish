@@ -11,7 +11,8 @@ complete -c pgo-spectrum -l solver -d 'SDP solver for the dual (components of at
 clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`)'"
 complete -c pgo-spectrum -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-spectrum -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
-complete -c pgo-spectrum -l strict -d 'Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning'
+complete -c pgo-spectrum -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
+complete -c pgo-spectrum -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-spectrum -l json -d 'Print one JSON object on stdout'
 complete -c pgo-spectrum -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'

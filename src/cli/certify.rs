@@ -7,6 +7,7 @@ use crate::graph::Pose2;
 use crate::io::{self, ReadOptions};
 use crate::solve::{CertifyOptions, EstimateReport as Report, certify_estimate};
 use clap::Parser;
+use serde::Serialize;
 use std::process::ExitCode;
 
 const EXAMPLES: &str = "\
@@ -53,6 +54,16 @@ pub struct Args {
     pub rerun: RerunArgs,
 }
 
+/// What `--json` prints: the library's report and the reader's warnings (lines skipped, e.g.
+/// EQUIV with --ignore-equiv: the bound is for the graph without them).
+#[derive(Serialize)]
+struct JsonReport<'a> {
+    #[serde(flatten)]
+    report: &'a Report,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<String>,
+}
+
 /// Entry point of the `pgo-certify` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
@@ -61,7 +72,7 @@ pub fn main() -> ExitCode {
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-certify")?;
-    let (graph, _) = args.input.read()?;
+    let (graph, read_report) = args.input.read()?;
     let poses = match &args.estimate {
         None => {
             if !graph.vertices_declared {
@@ -85,7 +96,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     estimate.poses = poses;
     rec.graph(&estimate);
     if args.json {
-        write_stdout(to_json_line(&report)?.as_bytes())?;
+        let json = JsonReport {
+            report: &report,
+            warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        };
+        write_stdout(to_json_line(&json)?.as_bytes())?;
     } else {
         eprint!("{}", text_report(args, &report));
     }
@@ -113,7 +128,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 
 /// The poses of `path`'s vertex lines, matched to the graph's poses by id.
 fn estimate_poses(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result<Vec<Pose2>> {
-    let (estimate, report) = io::read_path(path, &ReadOptions::default())?;
+    // Only the vertex lines of the estimate are used: EQUIV lines there are skipped (warning).
+    let options = ReadOptions {
+        ignore_equiv: true,
+        ..Default::default()
+    };
+    let (estimate, report) = io::read_path(path, &options)?;
     crate::cli::print_warnings(&report.warnings);
     if !estimate.vertices_declared {
         return Err(Error::Invalid(format!(

@@ -23,9 +23,14 @@ pub struct InputArgs {
     #[arg(long, value_enum, value_name = "DIALECT")]
     pub dialect: Option<Dialect>,
 
-    /// Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning
+    /// Treat unknown tags as errors instead of skipping them with a warning
     #[arg(long)]
     pub strict: bool,
+
+    /// Skip TORO's EQUIV lines (vertex merges, not implemented) with a warning instead of
+    /// refusing the file: the graph solved is then the file's without them
+    #[arg(long, conflicts_with = "strict")]
+    pub ignore_equiv: bool,
 
     /// Accept noise matrices that are not positive definite (only with --weights unit)
     #[arg(long)]
@@ -39,6 +44,7 @@ impl InputArgs {
             format: self.from,
             dialect: self.dialect,
             strict: self.strict,
+            ignore_equiv: self.ignore_equiv,
             allow_indefinite: self.allow_indefinite,
         };
         let (graph, report) = io::read_path(&self.input, &options)?;

@@ -65,9 +65,15 @@ pub struct Args {
     #[arg(long)]
     pub reindex: bool,
 
-    /// Treat unknown tags and EQUIV lines as errors instead of skipping them with a warning
+    /// Treat unknown tags as errors instead of skipping them with a warning
     #[arg(long)]
     pub strict: bool,
+
+    /// Skip TORO's EQUIV lines (vertex merges, not implemented) with a warning instead of
+    /// refusing the file: the graph written is the file's without them (--stats always skips
+    /// them with a warning)
+    #[arg(long, conflicts_with = "strict")]
+    pub ignore_equiv: bool,
 
     /// Accept noise matrices that are not positive definite
     #[arg(long)]
@@ -105,6 +111,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         format: args.from,
         dialect: args.dialect,
         strict: args.strict,
+        // Statistics describe the file and solve nothing: EQUIV lines are counted as skipped.
+        ignore_equiv: args.ignore_equiv || args.stats,
         allow_indefinite: args.allow_indefinite,
     };
     let rec = args.rerun.recorder("pgo-convert")?;

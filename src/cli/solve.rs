@@ -85,11 +85,14 @@ pub struct Timings {
     pub write_s: f64,
 }
 
-/// The report `--json` prints: the solution's figures and the timings.
+/// The report `--json` prints: the solution's figures, the reader's warnings (lines skipped, e.g.
+/// EQUIV with --ignore-equiv: the solution is for the graph without them) and the timings.
 #[derive(Debug, Serialize)]
 pub struct Report<'a> {
     #[serde(flatten)]
     pub solution: &'a Solution,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
 }
@@ -146,6 +149,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 
     let report = Report {
         solution: &solution,
+        warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
         timings: (!args.no_timings).then_some(Timings {
             read_s,
             solve_s,

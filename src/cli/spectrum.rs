@@ -5,6 +5,7 @@ use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_s
 use crate::dual::solver::SdpSolver;
 use crate::spectrum::{Spectrum as Report, SpectrumOptions, spectrum};
 use clap::Parser;
+use serde::Serialize;
 use std::process::ExitCode;
 
 const EXAMPLES: &str = "\
@@ -55,6 +56,16 @@ pub struct Args {
     pub rerun: RerunArgs,
 }
 
+/// What `--json` prints: the library's report and the reader's warnings (lines skipped, e.g.
+/// EQUIV with --ignore-equiv: the spectra are of the graph without them).
+#[derive(Serialize)]
+struct JsonReport<'a> {
+    #[serde(flatten)]
+    report: &'a Report,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<String>,
+}
+
 /// Entry point of the `pgo-spectrum` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
@@ -63,7 +74,7 @@ pub fn main() -> ExitCode {
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-spectrum")?;
-    let (graph, _) = args.input.read()?;
+    let (graph, read_report) = args.input.read()?;
     rec.graph(&graph);
     let options = SpectrumOptions {
         weights: args.weights.weights,
@@ -78,7 +89,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         );
     }
     let text = if args.json {
-        to_json_line(&report)?
+        to_json_line(&JsonReport {
+            report: &report,
+            warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        })?
     } else {
         text_report(&report)
     };

@@ -8,6 +8,18 @@ use crate::problem::matrix::PoseGraphMatrix;
 use crate::problem::weights::EdgeWeight;
 use faer::{Mat, c64};
 
+/// Refuses a graph without poses (and so without edges): there is nothing to solve, certify or
+/// analyse, and a report of it would call nothing "certified optimal". (The readers never return
+/// one: a file without vertex and edge lines is an input error at its place.)
+pub fn check_not_empty(graph: &PoseGraph) -> Result<(), Error> {
+    if graph.num_poses() == 0 {
+        return Err(Error::Invalid(
+            "the graph has no poses and no edges: nothing to solve".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses a graph whose edge terms τ|Δ|² + κ overflow a 64-bit float (the cost cannot be
 /// evaluated), naming the edge by its ids; `original` are the weights as the user's graph has
 /// them (for the message), `weights` those the matrices are built from.

@@ -5,7 +5,7 @@
 use super::within;
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
-use crate::problem::checks::check_edge_terms;
+use crate::problem::checks::{check_edge_terms, check_not_empty};
 use crate::problem::matrix::cost;
 use crate::problem::weights::{Weights, edge_weights};
 use crate::staircase::{StaircaseOptions, certify_estimate as certify_component, solve_graph};
@@ -72,6 +72,7 @@ pub fn certify_estimate(
     options: &CertifyOptions,
     source: &str,
 ) -> crate::Result<EstimateReport> {
+    check_not_empty(graph)?;
     let tol = options.tolerance;
     let mut components = Vec::new();
     for (part, members, _) in graph.components() {

@@ -17,7 +17,7 @@ use crate::dual::rounding::Rounding;
 use crate::dual::solver::SdpSolver;
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
-use crate::problem::checks::check_edge_terms;
+use crate::problem::checks::{check_edge_terms, check_not_empty};
 use crate::problem::matrix::cost;
 use crate::problem::weights::{EdgeWeight, Weights, edge_weights};
 use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_graph};
@@ -178,6 +178,7 @@ pub struct Solution {
 /// suboptimality of the estimate where it is not. Iterations are reported through
 /// [`crate::progress`].
 pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solution> {
+    check_not_empty(graph)?;
     if options.method == Method::Sdp {
         check_dense_size(graph, "--method sdp")?;
     }

@@ -102,6 +102,7 @@ fn smallest(mut v: Vec<f64>, k: usize) -> Vec<f64> {
 /// (all eigenvalues, λ* from the dual SDP) for components of at most [`DENSE_MAX_POSES`] poses,
 /// sparse beyond (the smallest K, λ from the scalable solver's certificate).
 pub fn spectrum(graph: &PoseGraph, options: &SpectrumOptions) -> crate::Result<Spectrum> {
+    crate::problem::checks::check_not_empty(graph)?;
     let policy = options.weights;
     let parts = graph.components();
     let sparse = |part: &crate::graph::PoseGraph| part.num_poses() > DENSE_MAX_POSES;

@@ -64,9 +64,20 @@ pub enum ParseErrorKind {
     )]
     Prior { tag: String },
     #[error(
-        "EQUIV (vertex equivalence) lines are not supported (without --strict they are skipped with a warning)"
+        "EQUIV (TORO's vertex equivalence: merge two vertices) is not supported, and the graph without it is another problem; pass --ignore-equiv to skip EQUIV lines and solve that one"
     )]
     Equiv,
+    #[error(
+        "no line of the input was understood (unknown tag '{tag}' here, {lines} such line{s} in all): not a g2o (VERTEX_SE2, EDGE_SE2) or TORO (VERTEX2, EDGE2) pose graph",
+        s = if *lines == 1 { "" } else { "s" }
+    )]
+    NothingUnderstood { tag: String, lines: usize },
+    #[error("{}", if *empty {
+        "the input is empty: no vertex or edge lines, no pose graph"
+    } else {
+        "no vertex or edge lines in the input: no pose graph"
+    })]
+    NoGraph { empty: bool },
     #[error("unknown tag '{tag}'")]
     UnknownTag { tag: String },
     #[error(

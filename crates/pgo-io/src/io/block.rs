@@ -266,7 +266,7 @@ impl BlockParser<'_> {
             Tag::Edge(family) => self.edge(line_no, line, fields, family),
             Tag::Fix => self.fix(line_no, fields),
             Tag::Equiv => {
-                if self.options.strict {
+                if self.options.strict || !self.options.ignore_equiv {
                     return Err(at_tag(ParseErrorKind::Equiv));
                 }
                 let e = self.block.equiv.get_or_insert(Skipped {

@@ -11,8 +11,11 @@ pub struct ReadOptions {
     /// The dialect; `None`: by the edge tags (see
     /// [`ReadReport::dialect_reason`](super::ReadReport::dialect_reason)).
     pub dialect: Option<Dialect>,
-    /// Unknown tags and EQUIV lines are errors instead of warnings.
+    /// Unknown tags are errors instead of warnings (EQUIV lines too, even with `ignore_equiv`).
     pub strict: bool,
+    /// TORO's `EQUIV a b` lines (merge two vertices, which pgo does not implement) are skipped
+    /// with a warning instead of being an error: the graph read is then the file's without them.
+    pub ignore_equiv: bool,
     /// Accept noise matrices that are not positive definite.
     pub allow_indefinite: bool,
 }

@@ -233,6 +233,9 @@ impl<'o> Reader<'o> {
     }
 
     fn finish(mut self) -> Result<(PoseGraph, ReadReport), ParseError> {
+        if self.acc.vertices.is_empty() && self.acc.edges.is_empty() {
+            return Err(self.no_graph());
+        }
         let (format, format_reason) = self.decide_format();
         let mut warnings = Vec::new();
         let declared = !self.acc.vertices.is_empty();
@@ -287,7 +290,7 @@ impl<'o> Reader<'o> {
             warnings.push(self.warning(
                 s.first_line,
                 format!(
-                    "EQUIV (vertex equivalence) is not supported: {} skipped (first here)",
+                    "EQUIV (vertex equivalence) is not supported: {} skipped (first here); the graph is read without them",
                     plural(s.count, "line")
                 ),
             ));
@@ -314,6 +317,29 @@ impl<'o> Reader<'o> {
             lines: self.lines,
         };
         Ok((graph, report))
+    }
+
+    /// The error for an input without vertex and edge lines: empty (`/dev/null`), only comments,
+    /// FIX or skipped EQUIV lines, or nothing but unknown tags (binary garbage, another format),
+    /// located at the first of those.
+    fn no_graph(&self) -> ParseError {
+        match self.acc.unknown.iter().min_by_key(|(_, s)| s.first_line) {
+            Some((tag, first)) => self.error(
+                first.first_line,
+                1,
+                ParseErrorKind::NothingUnderstood {
+                    tag: tag.clone(),
+                    lines: self.acc.unknown.iter().map(|(_, s)| s.count).sum(),
+                },
+            ),
+            None => self.error(
+                1,
+                1,
+                ParseErrorKind::NoGraph {
+                    empty: self.lines == 0,
+                },
+            ),
+        }
     }
 
     fn warning(&self, line: usize, message: String) -> Warning {

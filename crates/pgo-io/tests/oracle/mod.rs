@@ -24,6 +24,7 @@ pub fn reader_options() -> Vec<ReadOptions> {
         },
         ReadOptions {
             dialect: Some(Dialect::ToroCov),
+            ignore_equiv: true,
             ..Default::default()
         },
         ReadOptions {
@@ -123,6 +124,7 @@ fn round_trip(graph: &PoseGraph, read_with: &ReadOptions) {
             format: Some(format),
             dialect: Some(dialect),
             strict: true,
+            ignore_equiv: false,
             allow_indefinite: read_with.allow_indefinite,
         };
         let (back, _) = io::read(&out[..], "written", &options).unwrap_or_else(|e| {
