@@ -18,8 +18,10 @@ use crate::dual::solver::SdpSolver;
 use crate::error::Error;
 use crate::graph::{Pose2, PoseGraph};
 use crate::problem::checks::{check_edge_terms, check_not_empty};
+use crate::problem::gauge::move_pose_to;
 use crate::problem::matrix::cost;
 use crate::problem::weights::{EdgeWeight, Weights, edge_weights};
+use crate::simulate::wrap_angle;
 use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_graph};
 use serde::Serialize;
 
@@ -168,7 +170,9 @@ pub struct Solution {
     /// Whether the SDP solver reached its tolerance on every component.
     pub sdp_converged: bool,
     pub components: Vec<ComponentReport>,
-    /// The estimate, one pose per pose of the graph, in the graph's order.
+    /// The estimate, one pose per pose of the graph, in the graph's order, in the input's gauge
+    /// (each component's FIX pose, else its first pose, exactly where the input has it), headings
+    /// in (-π, π] (a FIX pose's as read).
     #[serde(skip)]
     pub estimate: Vec<Pose2>,
 }
@@ -177,11 +181,17 @@ pub struct Solution {
 /// exact (Algorithm 1 for small components, the scalable solver beyond), and bounds the
 /// suboptimality of the estimate where it is not. Iterations are reported through
 /// [`crate::progress`].
+///
+/// # Errors
+///
+/// Besides the solvers' own: two or more fixed poses (`FIX`) in one connected component, which
+/// make a problem with known poses that this does not solve.
 pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solution> {
     check_not_empty(graph)?;
     if options.method == Method::Sdp {
         check_dense_size(graph, "--method sdp")?;
     }
+    check_fixed(graph)?;
     let mut components = Vec::new();
     let mut estimate = graph.poses.clone();
     let staircase = StaircaseOptions {
@@ -245,12 +255,25 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
                 &staircase,
             )
         };
+        // The gauge: a FIX pose stays where the input has it (the solvers place pose 0 there).
+        let fixed = part.fixed.first().copied();
+        if let Some(k) = fixed {
+            poses = move_pose_to(&poses, k, part.poses[k]);
+        }
         if options.refine {
+            // Levenberg-Marquardt holds the FIX pose (or pose 0) where it is.
             let refined = crate::refine::refine(&part, &poses, &Default::default())?;
             report.certified_chi2 = Some(refined.initial_chi2);
             report.refined_chi2 = Some(refined.chi2);
             report.refine_iterations = Some(refined.iterations);
             poses = refined.poses;
+        }
+        // Headings in (-π, π] (the same rotations: f and chi2 see only e^{iθ} and wrapped
+        // differences), but the fixed pose exactly as read.
+        for (k, pose) in poses.iter_mut().enumerate() {
+            if Some(k) != fixed {
+                pose.theta = wrap_angle(pose.theta);
+            }
         }
         for (pose, &k) in poses.iter().zip(&members) {
             estimate[k] = *pose;
@@ -282,6 +305,34 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         components,
         estimate,
     })
+}
+
+/// Refuses several fixed poses in one connected component: they are known poses, a constrained
+/// problem whose optimum and certificate differ from those of f (one fixed pose per component is
+/// only the gauge, which f is invariant to).
+fn check_fixed(graph: &PoseGraph) -> crate::Result<()> {
+    if graph.fixed.len() < 2 {
+        return Ok(());
+    }
+    let (label, count) = graph.connected_components();
+    let mut by_component: Vec<Vec<u32>> = vec![Vec::new(); count];
+    for &k in &graph.fixed {
+        by_component[label[k]].push(graph.ids[k]);
+    }
+    match by_component.iter_mut().find(|ids| ids.len() > 1) {
+        None => Ok(()),
+        Some(ids) => {
+            ids.sort_unstable();
+            let list: Vec<String> = ids.iter().map(u32::to_string).collect();
+            Err(Error::Invalid(format!(
+                "FIX lines name vertices {}, which are in one connected component: several fixed \
+                 poses in one component are known poses, a constrained problem that pgo does not \
+                 solve or certify (one FIX per component only sets the gauge); keep at most one \
+                 FIX line per component",
+                list.join(", ")
+            )))
+        }
+    }
 }
 
 /// The staircase's Newton steps, reported through [`crate::progress`] (the `iteration` timeline

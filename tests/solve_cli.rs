@@ -1,0 +1,198 @@
+//! `pgo-solve` as a user runs it: the gauge of FIX lines and the written angles. Figures are held
+//! against independent ones: the input file's own values, rigid-motion invariants, and what
+//! pgo-certify says about the file pgo-solve wrote.
+
+mod common;
+
+use common::{Dir, Naive, datasets_dir, naive_read, run_with_stdin, s, text};
+use serde_json::Value;
+use std::f64::consts::PI;
+use std::path::Path;
+use std::process::Output;
+
+fn solve(args: &[&str]) -> Output {
+    run_with_stdin("pgo-solve", args, None)
+}
+
+fn json(out: &Output) -> Value {
+    assert!(common::exited_normally(out), "{}", text(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&out.stdout)))
+}
+
+fn dataset(name: &str) -> String {
+    datasets_dir().join(name).to_str().unwrap().to_string()
+}
+
+fn read(path: &Path) -> Naive {
+    naive_read(&std::fs::read(path).unwrap())
+}
+
+fn vertex(g: &Naive, id: u32) -> [f64; 3] {
+    g.vertices.iter().find(|v| v.0 == id).unwrap().1
+}
+
+fn bits(p: [f64; 3]) -> [u64; 3] {
+    p.map(f64::to_bits)
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * a.abs().max(b.abs()).max(1.0)
+}
+
+/// MIT.g2o with `FIX` lines appended.
+fn mit_with(dir: &Dir, fix: &str) -> String {
+    let mut bytes = std::fs::read(dataset("MIT.g2o")).unwrap();
+    bytes.extend_from_slice(format!("{fix}\n").as_bytes());
+    s(&dir.file("mit-fix.g2o", &bytes)).to_string()
+}
+
+#[test]
+fn a_fix_vertex_is_the_gauge_with_and_without_refine() {
+    let dir = Dir::new();
+    let input = mit_with(&dir, "FIX 100");
+    let original = read(Path::new(&input));
+    let free_out = dir.path("free.g2o");
+    let free = json(&solve(&[
+        &dataset("MIT.g2o"),
+        "--json",
+        "--no-timings",
+        "-o",
+        s(&free_out),
+    ]));
+    for refine in [false, true] {
+        let out_path = dir.path("fixed.g2o");
+        let mut args = vec![&input[..], "--json", "--no-timings", "-o", s(&out_path)];
+        if refine {
+            args.push("--refine");
+        }
+        let r = json(&solve(&args));
+        let written = read(&out_path);
+        // Vertex 100 exactly as read, bit for bit; the FIX line is kept.
+        assert_eq!(
+            bits(vertex(&written, 100)),
+            bits(vertex(&original, 100)),
+            "refine {refine}"
+        );
+        assert_eq!(written.fixed, vec![100]);
+        if refine {
+            // The refined estimate is another estimate (LM held vertex 100): its chi2 is the
+            // chi2 of the refined free estimate (the same minimum, moved), to LM's tolerance.
+            let fixed_chi2 = r["refined_chi2"].as_f64().unwrap();
+            let free_refined = json(&solve(&[
+                &dataset("MIT.g2o"),
+                "--json",
+                "--no-timings",
+                "--refine",
+                "-o",
+                "/dev/null",
+            ]));
+            let free_chi2 = free_refined["refined_chi2"].as_f64().unwrap();
+            assert!(
+                close(fixed_chi2, free_chi2, 1e-6),
+                "{fixed_chi2} {free_chi2}"
+            );
+            continue;
+        }
+        // The same estimate up to a rigid motion: the cost of the written file (computed by
+        // pgo-certify from the file) equals the cost without FIX, and distances between poses
+        // and differences of headings are those of the free estimate.
+        let certify = run_with_stdin(
+            "pgo-certify",
+            &[&dataset("MIT.g2o"), "--estimate", s(&out_path), "--json"],
+            None,
+        );
+        assert_eq!(certify.status.code(), Some(0), "{}", text(&certify.stderr));
+        let c = json(&certify);
+        let (cost, free_cost) = (c["cost"].as_f64().unwrap(), free["cost"].as_f64().unwrap());
+        assert!(close(cost, free_cost, 1e-9), "{cost} vs {free_cost}");
+        assert_eq!(r["cost"], free["cost"]);
+        assert_eq!(r["lower_bound"], free["lower_bound"]);
+        let free_written = read(&free_out);
+        for (i, j) in [(0, 100), (100, 807), (3, 500)] {
+            let dist = |g: &Naive| {
+                let (a, b) = (vertex(g, i), vertex(g, j));
+                ((b[0] - a[0]).hypot(b[1] - a[1]), (b[2] - a[2]).sin())
+            };
+            let (d, t) = dist(&written);
+            let (d0, t0) = dist(&free_written);
+            assert!(close(d, d0, 1e-9) && (t - t0).abs() < 1e-9, "{i}-{j}");
+        }
+        // Without FIX, pose 0 stays where the input has it.
+        assert_eq!(bits(vertex(&free_written, 0)), bits(vertex(&original, 0)));
+    }
+}
+
+#[test]
+fn several_fix_vertices_in_one_component_are_refused() {
+    let dir = Dir::new();
+    let input = mit_with(&dir, "FIX 100\nFIX 5 100");
+    for refine in [false, true] {
+        let out_path = dir.path("out.g2o");
+        let mut args = vec![&input[..], "-o", s(&out_path)];
+        if refine {
+            args.push("--refine");
+        }
+        let out = solve(&args);
+        assert_eq!(out.status.code(), Some(2));
+        let err = text(&out.stderr);
+        assert!(
+            err.starts_with("pgo-solve: error: FIX lines name vertices 5, 100, which are in one connected component"),
+            "{err}"
+        );
+        assert!(err.contains("known poses"), "{err}");
+        assert!(!out_path.exists());
+    }
+}
+
+#[test]
+fn one_fix_vertex_per_component_fixes_each() {
+    // Two triangles, inconsistent measurements (the estimate moves), one FIX in each.
+    let info = "1 0 0 1 0 1";
+    let mut g = String::new();
+    for base in [0, 10] {
+        for k in 0..3 {
+            g += &format!(
+                "VERTEX_SE2 {} {}.5 {}.25 {}.75\n",
+                base + k,
+                k + base,
+                2 * k,
+                k
+            );
+        }
+        g += &format!("EDGE_SE2 {} {} 1 0.1 0.2 {info}\n", base, base + 1);
+        g += &format!("EDGE_SE2 {} {} 1.2 -0.1 2 {info}\n", base + 1, base + 2);
+        g += &format!("EDGE_SE2 {} {} -0.9 0.3 -2.1 {info}\n", base + 2, base);
+    }
+    g += "FIX 2 11\n";
+    let dir = Dir::new();
+    let input = dir.file("two.g2o", g.as_bytes());
+    let out_path = dir.path("out.g2o");
+    let out = solve(&[s(&input), "-o", s(&out_path), "--no-timings"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let (before, after) = (read(&input), read(&out_path));
+    for id in [2, 11] {
+        assert_eq!(bits(vertex(&after, id)), bits(vertex(&before, id)), "{id}");
+    }
+    for id in [0, 1, 10, 12] {
+        assert_ne!(bits(vertex(&after, id)), bits(vertex(&before, id)), "{id}");
+    }
+}
+
+#[test]
+fn solved_angles_are_in_minus_pi_pi() {
+    let dir = Dir::new();
+    let mit = dataset("MIT.g2o");
+    for refine in [false, true] {
+        let out_path = dir.path("mit.g2o");
+        let mut args = vec![&mit[..], "-o", s(&out_path)];
+        if refine {
+            args.push("--refine");
+        }
+        assert_eq!(solve(&args).status.code(), Some(0));
+        let g = read(&out_path);
+        assert_eq!(g.vertices.len(), 808);
+        for (id, p) in &g.vertices {
+            assert!(p[2] > -PI && p[2] <= PI, "vertex {id}: {}", p[2]);
+        }
+    }
+}
