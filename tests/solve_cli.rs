@@ -1,6 +1,7 @@
-//! `pgo-solve` as a user runs it: the gauge of FIX lines and the written angles. Figures are held
-//! against independent ones: the input file's own values, rigid-motion invariants, and what
-//! pgo-certify says about the file pgo-solve wrote.
+//! `pgo-solve` as a user runs it: the gauge of FIX lines, the estimate the report speaks of, g2o's
+//! chi2 beside the cost, and the written angles. Figures are held against independent ones: the
+//! input file's own values, a chi2 computed here from the written file, a hand value,
+//! rigid-motion invariants, and what pgo-certify says about the file pgo-solve wrote.
 
 mod common;
 
@@ -33,6 +34,37 @@ fn vertex(g: &Naive, id: u32) -> [f64; 3] {
 
 fn bits(p: [f64; 3]) -> [u64; 3] {
     p.map(f64::to_bits)
+}
+
+/// g2o's chi2 of the poses of `estimate` for the edges of `graph` (information in g2o order),
+/// written out here from g2o's EdgeSE2: e = [R_z^T (R_i^T (t_j - t_i) - t_z); wrap(θ_j - θ_i - θ_z)].
+fn naive_chi2(graph: &Naive, estimate: &Naive) -> f64 {
+    let wrap = |a: f64| {
+        let w = a.rem_euclid(2.0 * PI);
+        if w > PI { w - 2.0 * PI } else { w }
+    };
+    graph
+        .edges
+        .iter()
+        .map(|(i, j, z, o)| {
+            let (a, b) = (vertex(estimate, *i), vertex(estimate, *j));
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let (u, v) = (
+                a[2].cos() * dx + a[2].sin() * dy - z[0],
+                -a[2].sin() * dx + a[2].cos() * dy - z[1],
+            );
+            let e = [
+                z[2].cos() * u + z[2].sin() * v,
+                -z[2].sin() * u + z[2].cos() * v,
+                wrap(b[2] - a[2] - z[2]),
+            ];
+            let m = [[o[0], o[1], o[2]], [o[1], o[3], o[4]], [o[2], o[4], o[5]]];
+            (0..3)
+                .flat_map(|r| (0..3).map(move |c| (r, c)))
+                .map(|(r, c)| e[r] * m[r][c] * e[c])
+                .sum::<f64>()
+        })
+        .sum()
 }
 
 fn close(a: f64, b: f64, rel: f64) -> bool {
@@ -195,4 +227,104 @@ fn solved_angles_are_in_minus_pi_pi() {
             assert!(p[2] > -PI && p[2] <= PI, "vertex {id}: {}", p[2]);
         }
     }
+}
+
+#[test]
+fn chi2_of_the_estimate_and_the_refined_file_named_apart() {
+    let dir = Dir::new();
+    let input = dataset("intel.g2o");
+    let graph = read(Path::new(&input));
+    let out_path = dir.path("intel-opt.g2o");
+    let r = json(&solve(&[
+        &input,
+        "--json",
+        "--no-timings",
+        "-o",
+        s(&out_path),
+    ]));
+    let chi2 = r["chi2"].as_f64().unwrap();
+    assert!(
+        close(chi2, naive_chi2(&graph, &read(&out_path)), 1e-9),
+        "{chi2}"
+    );
+    assert_eq!(r["written_estimate"], "solved");
+    assert_eq!(r["written_chi2"], r["chi2"]);
+    assert_eq!(r["written_certified"], true);
+    assert_eq!(r["certified"], true);
+
+    let lm_path = dir.path("intel-lm.g2o");
+    let out = solve(&[
+        &input,
+        "--json",
+        "--no-timings",
+        "--refine",
+        "-o",
+        s(&lm_path),
+    ]);
+    let r = json(&out);
+    // The cost and bound stay the certified estimate's (as without --refine)...
+    assert_eq!(r["certified"], true);
+    assert_eq!(r["chi2"].as_f64().unwrap(), chi2);
+    // ...and the file holds the refined one, named as such, with its own chi2.
+    assert_eq!(r["written_estimate"], "refined");
+    assert_eq!(r["written_certified"], false);
+    let written_chi2 = r["written_chi2"].as_f64().unwrap();
+    assert_eq!(r["refined_chi2"].as_f64().unwrap(), written_chi2);
+    assert!(close(
+        written_chi2,
+        naive_chi2(&graph, &read(&lm_path)),
+        1e-9
+    ));
+    assert!(written_chi2 < chi2);
+    // What pgo-certify says of that file: not certified (an optimum of chi2, not of the cost),
+    // with the same chi2.
+    let certify = run_with_stdin(
+        "pgo-certify",
+        &[&input, "--estimate", s(&lm_path), "--json"],
+        None,
+    );
+    assert_eq!(certify.status.code(), Some(1));
+    let c = json(&certify);
+    assert_eq!(c["certified"], false);
+    assert!(close(c["chi2"].as_f64().unwrap(), written_chi2, 1e-9));
+    assert!(c["cost"].as_f64().unwrap() > r["cost"].as_f64().unwrap());
+
+    let out = solve(&[&input, "--no-timings", "--refine", "-o", "/dev/null"]);
+    let report = text(&out.stderr);
+    assert!(
+        report.contains(&format!(
+            "  written estimate     refined by LM (chi2 {written_chi2}), not the certified one; certify it with pgo-certify\n"
+        )),
+        "{report}"
+    );
+    assert!(
+        report.contains(&format!("  chi2 (g2o)           {chi2}\n")),
+        "{report}"
+    );
+}
+
+#[test]
+fn pgo_certify_prints_chi2_and_cost_by_hand() {
+    // One edge, x0 = (0, 0, 0), x1 = (1, 2, 0.5), z = (1, 1, 0.3), Ω = diag(2, 3, 5).
+    // g2o: e = R(0.3)ᵀ (0, 1) = (sin 0.3, cos 0.3), angle 0.2: chi2 = 2 sin² + 3 cos² + 5·0.04.
+    // f: τ = 2 / (1/2 + 1/3) = 2.4 times |(1, 2) - (1, 1)|² = 1, κ = 10 times |e^{0.5i} - e^{0.3i}|².
+    let g = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 2 0.5\nEDGE_SE2 0 1 1 1 0.3 2 0 0 3 0 5\n";
+    let dir = Dir::new();
+    let input = dir.file("one.g2o", g.as_bytes());
+    let out = run_with_stdin("pgo-certify", &[s(&input), "--json"], None);
+    assert_eq!(out.status.code(), Some(1));
+    let c = json(&out);
+    let (sn, cs) = 0.3f64.sin_cos();
+    let chi2 = 2.0 * sn * sn + 3.0 * cs * cs + 5.0 * 0.04;
+    let cost = 2.4 + 10.0 * (2.0 - 2.0 * 0.2f64.cos());
+    assert!(
+        close(c["chi2"].as_f64().unwrap(), chi2, 1e-14),
+        "{}",
+        c["chi2"]
+    );
+    assert!(
+        close(c["cost"].as_f64().unwrap(), cost, 1e-14),
+        "{}",
+        c["cost"]
+    );
 }

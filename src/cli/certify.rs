@@ -28,6 +28,16 @@ Exit status: 0 certified within --tol, 1 not certified (the bound printed still 
 /// cost - lower_bound bounds the suboptimality. When that fails (the estimate
 /// is not optimal, or not optimal enough for --tol), pgo-certify solves the problem itself and
 /// reports the lower bound that solution proves: the bound printed always holds.
+///
+/// The cost is the paper's objective (8) with isotropic weights per edge, f = sum tau*|p_j - p_i -
+/// r_i*Delta_ij|^2 + kappa*|r_j - r_i*R_ij|^2, tau = 2/tr(inv(Omega_tt)) and kappa = 2*Omega_thth
+/// from the edge's information matrix Omega (--weights unit: tau = kappa = 1). It is not g2o's
+/// chi2, sum e^T*Omega*e under the full information matrices (printed beside it), nor GTSAM's
+/// error, which is chi2/2 (to first order in the residuals: GTSAM's residual is the log map of
+/// the relative pose error). An optimum of chi2 (from g2o, GTSAM or pgo-solve --refine) is an
+/// optimum of another objective, so pgo-certify reports it NOT certified, with a proven bound on
+/// how far its cost is above the optimum of f (intel: about 4% relative): that answer is right.
+/// The estimate pgo-solve writes without --refine is the one that can be certified.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-certify", version, after_help = EXAMPLES)]
 pub struct Args {
@@ -172,6 +182,11 @@ fn text_report(args: &Args, r: &Report) -> String {
     );
     let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     out += &row("cost", num(r.cost));
+    out += &row(
+        "chi2 (g2o)",
+        r.chi2
+            .map_or("undefined (a covariance matrix is singular)".into(), num),
+    );
     out += &row("lower bound", num(r.lower_bound));
     out += &row(
         "suboptimality <=",

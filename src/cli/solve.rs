@@ -62,7 +62,8 @@ pub struct Args {
 
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
     /// matrices (g2o's chi2) before writing it; the report's cost and bound stay those of the
-    /// certified estimate, and chi2 before and after is added
+    /// certified estimate, chi2 before and after is added, and the report says that the written
+    /// estimate is the refined one, which is not certified (check it with pgo-certify)
     #[arg(long)]
     pub refine: bool,
 
@@ -85,16 +86,42 @@ pub struct Timings {
     pub write_s: f64,
 }
 
-/// The report `--json` prints: the solution's figures, the reader's warnings (lines skipped, e.g.
-/// EQUIV with --ignore-equiv: the solution is for the graph without them) and the timings.
+/// The report `--json` prints: the solution's figures, which estimate is written, the reader's
+/// warnings (lines skipped, e.g. EQUIV with --ignore-equiv: the solution is for the graph without
+/// them) and the timings.
 #[derive(Debug, Serialize)]
 pub struct Report<'a> {
     #[serde(flatten)]
     pub solution: &'a Solution,
+    /// The estimate written to -o: "solved" (the one the cost and bound are of, certified or not)
+    /// or "refined" (by LM under the full information, after certification: not certified).
+    pub written_estimate: &'static str,
+    /// g2o's chi2 of the written estimate.
+    pub written_chi2: Option<f64>,
+    /// Whether the written estimate is certified within --tol (never for a refined one).
+    pub written_certified: bool,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
+}
+
+impl<'a> Report<'a> {
+    fn new(solution: &'a Solution, warnings: Vec<String>, timings: Option<Timings>) -> Self {
+        let refined = solution.refined_chi2.is_some();
+        Report {
+            solution,
+            written_estimate: if refined { "refined" } else { "solved" },
+            written_chi2: if refined {
+                solution.refined_chi2
+            } else {
+                solution.chi2
+            },
+            written_certified: !refined && solution.certified,
+            warnings,
+            timings,
+        }
+    }
 }
 
 /// Entry point of the `pgo-solve` binary.
@@ -147,15 +174,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     let write_s = t2.elapsed().as_secs_f64();
 
-    let report = Report {
-        solution: &solution,
-        warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
-        timings: (!args.no_timings).then_some(Timings {
+    let report = Report::new(
+        &solution,
+        read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        (!args.no_timings).then_some(Timings {
             read_s,
             solve_s,
             write_s,
         }),
-    };
+    );
     if args.json {
         write_stdout(to_json_line(&report)?.as_bytes())?;
     } else {
@@ -191,7 +218,10 @@ fn text_report(input: &str, report: &Report) -> String {
         }
     );
     let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
+    let chi2_text =
+        |c: Option<f64>| c.map_or("undefined (a covariance matrix is singular)".into(), num);
     out += &row("cost", num(r.cost));
+    out += &row("chi2 (g2o)", chi2_text(r.chi2));
     out += &row("lower bound", num(r.lower_bound));
     out += &row(
         "suboptimality <=",
@@ -240,7 +270,9 @@ fn text_report(input: &str, report: &Report) -> String {
     }
     out += &row(
         "result",
-        if r.certified {
+        if r.certified && r.refined_chi2.is_some() {
+            "certified optimal within the bound above (the estimate before refinement)".to_string()
+        } else if r.certified {
             "certified optimal within the bound above".to_string()
         } else if r.components.iter().any(|c| c.method == Method::Staircase) {
             "NOT certified within --tol; the bound above still holds".to_string()
@@ -275,6 +307,15 @@ fn text_report(input: &str, report: &Report) -> String {
                 "{} -> {} (full information matrices)",
                 num(before),
                 num(chi2)
+            ),
+        );
+    }
+    if report.written_estimate == "refined" {
+        out += &row(
+            "written estimate",
+            format!(
+                "refined by LM (chi2 {}), not the certified one; certify it with pgo-certify",
+                chi2_text(report.written_chi2)
             ),
         );
     }

@@ -54,6 +54,10 @@ pub struct EstimateReport {
     pub poses: usize,
     pub edges: usize,
     pub cost: f64,
+    /// g2o's chi2 of the estimate: Σ eᵀΩe under the full information matrices, another objective
+    /// than the cost (GTSAM's error is chi2 / 2). `None` (JSON null) where a covariance is
+    /// singular.
+    pub chi2: Option<f64>,
     pub lower_bound: f64,
     pub suboptimality_bound: f64,
     pub relative_suboptimality_bound: f64,
@@ -127,11 +131,13 @@ pub fn certify_estimate(
     let cost: f64 = components.iter().map(|c| c.cost).sum();
     let lower_bound: f64 = components.iter().map(|c| c.lower_bound).sum();
     let suboptimality_bound = cost - lower_bound;
+    let chi2 = Some(crate::refine::chi2(graph, estimate)).filter(|c| c.is_finite());
     Ok(EstimateReport {
         weights: options.weights,
         poses: graph.num_poses(),
         edges: graph.edges.len(),
         cost,
+        chi2,
         lower_bound,
         suboptimality_bound,
         relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),

@@ -127,7 +127,8 @@ pub struct ComponentReport {
     /// Norm of the Riemannian gradient at the estimate.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gradient_norm: Option<f64>,
-    /// With refinement: g2o's chi2 of the certified estimate, and after refinement.
+    /// g2o's chi2 of the certified estimate (absent where a covariance is singular), and with
+    /// refinement after it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub certified_chi2: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -151,6 +152,10 @@ pub struct Solution {
     pub edges: usize,
     /// f at the certified estimate.
     pub cost: f64,
+    /// g2o's chi2 of the certified estimate: Σ eᵀΩe under the full information matrices (another
+    /// objective than f; GTSAM's error is chi2 / 2). `None` (JSON null) where a covariance is
+    /// singular.
+    pub chi2: Option<f64>,
     /// Proven lower bound on the optimum f*.
     pub lower_bound: f64,
     /// cost − lower_bound: the certified estimate is at most this far from optimal.
@@ -260,10 +265,10 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         if let Some(k) = fixed {
             poses = move_pose_to(&poses, k, part.poses[k]);
         }
+        report.certified_chi2 = Some(crate::refine::chi2(&part, &poses)).filter(|c| c.is_finite());
         if options.refine {
             // Levenberg-Marquardt holds the FIX pose (or pose 0) where it is.
             let refined = crate::refine::refine(&part, &poses, &Default::default())?;
-            report.certified_chi2 = Some(refined.initial_chi2);
             report.refined_chi2 = Some(refined.chi2);
             report.refine_iterations = Some(refined.iterations);
             poses = refined.poses;
@@ -284,6 +289,9 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
     let cost = components.iter().fold(0.0, |a, c| a + c.cost);
     let lower_bound = components.iter().fold(0.0, |a, c| a + c.lower_bound);
     let suboptimality_bound = cost - lower_bound;
+    let chi2 = components
+        .iter()
+        .try_fold(0.0, |a, c| c.certified_chi2.map(|x| a + x));
     Ok(Solution {
         method: options.method,
         solver: options.solver,
@@ -291,6 +299,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         poses: graph.num_poses(),
         edges: graph.edges.len(),
         cost,
+        chi2,
         lower_bound,
         suboptimality_bound,
         refined_chi2: options
