@@ -1,7 +1,8 @@
 //! `pgo-solve` as a user runs it: the gauge of FIX lines, the estimate the report speaks of, g2o's
-//! chi2 beside the cost, and the written angles. Figures are held against independent ones: the
-//! input file's own values, a chi2 computed here from the written file, a hand value,
-//! rigid-motion invariants, and what pgo-certify says about the file pgo-solve wrote.
+//! chi2 beside the cost, what ran, exit statuses, written angles, and flags and outputs refused
+//! before the work. Figures are held against independent ones: the input file's own values, a
+//! chi2 computed here from the written file, a hand value, rigid-motion invariants, and what
+//! pgo-certify says about the file pgo-solve wrote.
 
 mod common;
 
@@ -327,4 +328,137 @@ fn pgo_certify_prints_chi2_and_cost_by_hand() {
         "{}",
         c["cost"]
     );
+}
+
+#[test]
+fn the_report_says_what_ran_and_warns_of_an_unused_solver() {
+    let toy = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
+    let header = |out: &Output| text(&out.stderr).lines().next().unwrap_or("").to_string();
+    let out = solve(&[toy, "--weights", "unit", "-o", "/dev/null"]);
+    assert!(
+        header(&out).ends_with("; method auto: sdp (ipm)"),
+        "{}",
+        header(&out)
+    );
+    let out = solve(&[
+        toy,
+        "--weights",
+        "unit",
+        "--method",
+        "staircase",
+        "-o",
+        "/dev/null",
+    ]);
+    assert!(
+        header(&out).ends_with("; method staircase"),
+        "{}",
+        header(&out)
+    );
+
+    // MIT (808 poses, staircase) and a triangle (sdp) in one file.
+    let dir = Dir::new();
+    let mut bytes = std::fs::read(dataset("MIT.g2o")).unwrap();
+    bytes.extend_from_slice(
+        b"VERTEX_SE2 5000 0 0 0\nVERTEX_SE2 5001 1 0 0\nVERTEX_SE2 5002 1 1 0\n\
+          EDGE_SE2 5000 5001 1 0 0 1 0 0 1 0 1\nEDGE_SE2 5001 5002 0 1 0 1 0 0 1 0 1\n\
+          EDGE_SE2 5002 5000 -1 -1.1 0.1 1 0 0 1 0 1\n",
+    );
+    let mixed = dir.file("mixed.g2o", &bytes);
+    let out = solve(&[s(&mixed), "-o", "/dev/null"]);
+    assert!(
+        header(&out).ends_with("; method auto: sdp (ipm) on 1 component, staircase on 1"),
+        "{}",
+        header(&out)
+    );
+    assert!(!text(&out.stderr).contains("warning"));
+
+    // --solver where no component runs the SDP: a warning, the same report.
+    let mit = dataset("MIT.g2o");
+    let plain = solve(&[&mit, "--json", "--no-timings", "-o", "/dev/null"]);
+    let out = solve(&[
+        &mit,
+        "--json",
+        "--no-timings",
+        "-o",
+        "/dev/null",
+        "--solver",
+        "clarabel",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let (mut with, without) = (json(&out), json(&plain));
+    assert_eq!(with["solver"], "clarabel");
+    with["solver"] = "ipm".into();
+    assert_eq!(with, without);
+    assert_eq!(
+        text(&out.stderr),
+        "pgo-solve: warning: --solver clarabel had no effect: no component was solved by the SDP (method auto: staircase)\n"
+    );
+}
+
+#[test]
+fn fail_uncertified_exits_1_and_still_writes() {
+    // The toy graph under unit weights is not certified (Appendix 8.8); MIT is.
+    let toy = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
+    let dir = Dir::new();
+    let out_path = dir.path("toy.g2o");
+    let out = solve(&[toy, "--weights", "unit", "-o", s(&out_path)]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(text(&out.stderr).contains("NOT certified"));
+    std::fs::remove_file(&out_path).unwrap();
+    let out = solve(&[
+        toy,
+        "--weights",
+        "unit",
+        "-o",
+        s(&out_path),
+        "--fail-uncertified",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert_eq!(read(&out_path).vertices.len(), 5);
+    let out = solve(&[&dataset("MIT.g2o"), "-o", "/dev/null", "--fail-uncertified"]);
+    assert_eq!(out.status.code(), Some(0));
+}
+
+#[test]
+fn bad_tolerance_and_outputs_are_named_before_the_work() {
+    let mit = dataset("MIT.g2o");
+    for tool in ["pgo-solve", "pgo-certify"] {
+        for tol in [&["--tol", "-1"][..], &["--tol=-1"][..]] {
+            let mut args = vec![&mit[..]];
+            args.extend_from_slice(tol);
+            let out = run_with_stdin(tool, &args, None);
+            assert_eq!(out.status.code(), Some(2), "{tool} {tol:?}");
+            assert!(
+                text(&out.stderr).contains("--tol must be a finite number >= 0, found -1"),
+                "{tool} {tol:?}: {}",
+                text(&out.stderr)
+            );
+        }
+    }
+    let dir = Dir::new();
+    let out = solve(&[&mit, "-o", s(dir.0.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        text(&out.stderr),
+        format!("pgo-solve: error: -o {}: is a directory\n", s(dir.0.path()))
+    );
+    let missing = dir.path("no/such/out.g2o");
+    let out = solve(&[&mit, "-o", s(&missing)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "pgo-solve: error: -o {}: no such directory {}\n",
+            s(&missing),
+            s(&dir.path("no/such"))
+        )
+    );
+    // Tools that only write check it when writing.
+    let out = run_with_stdin("pgo-convert", &[&mit, "-o", s(dir.0.path())], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        text(&out.stderr),
+        format!("pgo-convert: error: {}: is a directory\n", s(dir.0.path()))
+    );
+    assert!(dir.entries().is_empty());
 }

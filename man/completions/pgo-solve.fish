@@ -12,7 +12,7 @@ isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync an
 complete -c pgo-solve -l method -d 'Solution method [auto: sdp for components of at most 100 poses, else staircase]' -r -f -a "auto\t'sdp for components of at most 100 poses, staircase beyond'
 sdp\t'Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)'
 staircase\t'The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase'"
-complete -c pgo-solve -l solver -d 'SDP solver for the dual' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'
+complete -c pgo-solve -l solver -d 'SDP solver for the dual, on the components the sdp method solves (a warning if none) [default: ipm]' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'
 clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`)'"
 complete -c pgo-solve -l tol -d 'Relative suboptimality bound under which the result is called certified' -r
 complete -c pgo-solve -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
@@ -21,6 +21,7 @@ complete -c pgo-solve -l strict -d 'Treat unknown tags as errors instead of skip
 complete -c pgo-solve -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2) before writing it; the report\'s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)'
+complete -c pgo-solve -l fail-uncertified -d 'Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
 complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'
 complete -c pgo-solve -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'

@@ -30,7 +30,7 @@ isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync a
 '--method=[Solution method \[auto\: sdp for components of at most 100 poses, else staircase\]]:METHOD:((auto\:"sdp for components of at most 100 poses, staircase beyond"
 sdp\:"Algorithm 1\: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)"
 staircase\:"The scalable solver\: Riemannian Newton, sparse certificate, Riemannian staircase"))' \
-'--solver=[SDP solver for the dual]:SOLVER:((ipm\:"The dedicated primal-dual interior-point method (default build)"
+'--solver=[SDP solver for the dual, on the components the sdp method solves (a warning if none) \[default\: ipm\]]:SOLVER:((ipm\:"The dedicated primal-dual interior-point method (default build)"
 clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \`clarabel-sdp\`)"))' \
 '--tol=[Relative suboptimality bound under which the result is called certified]:REL:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
@@ -39,6 +39,7 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)]' \
+'--fail-uncertified[Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \

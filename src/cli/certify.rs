@@ -53,7 +53,7 @@ pub struct Args {
     pub weights: WeightArgs,
 
     /// Relative suboptimality bound under which the estimate is called certified
-    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance)]
+    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance, allow_negative_numbers = true)]
     pub tol: f64,
 
     /// Print the report as one JSON object on stdout

@@ -116,6 +116,29 @@ pub fn parse_tolerance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Checks, before the work, that `-o PATH` can be a graph file: not a directory, in a directory
+/// that exists (`-` is stdout).
+pub fn check_output(path: &str) -> crate::Result<()> {
+    if path == "-" {
+        return Ok(());
+    }
+    let target = std::path::Path::new(path);
+    if target.is_dir() {
+        return Err(Error::Invalid(format!("-o {path}: is a directory")));
+    }
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(Error::Invalid(format!(
+            "-o {path}: no such directory {}",
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Serializes a report as one line of JSON.
 pub fn to_json_line<T: serde::Serialize>(value: &T) -> crate::Result<String> {
     let mut s = serde_json::to_string(value)

@@ -1,7 +1,8 @@
 //! `pgo-solve`: the globally optimal estimate of a pose graph and the bound that proves it.
 
 use super::common::{
-    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
+    InputArgs, RerunArgs, WeightArgs, check_dense_size, check_output, num, to_json_line,
+    write_stdout,
 };
 use crate::dual::rounding::Rounding;
 use crate::dual::solver::SdpSolver;
@@ -18,7 +19,18 @@ Examples:
   pgo-solve datasets/paper_toy.g2o --weights unit -o toy-solved.g2o
   pgo-solve MIT.g2o --json -o MIT-opt.g2o | jq '{cost, lower_bound, certified}'
   pgo-solve ais2klinik.g2o -o ais2klinik-opt.g2o && pgo-certify ais2klinik.g2o --estimate ais2klinik-opt.g2o
-  pgo-simulate -n 20 --seed 3 | pgo-solve - --weights unit --json -o /dev/null";
+  pgo-simulate -n 20 --seed 3 | pgo-solve - --weights unit --json -o /dev/null
+  pgo-solve MIT.g2o --fail-uncertified -o MIT-opt.g2o || echo 'not certified (1) or error (2)'
+
+Gauge: the estimate is placed in the input's frame: a component's pose named by a FIX line stays
+exactly where the input has it (else its smallest id does); the cost does not depend on that
+choice. Several FIX poses in one component (known poses) are refused. Headings are written in
+(-pi, pi].
+
+Exit status: 0 solved, certified or not (the result line, or \"certified\" in --json, says
+which); 1 with --fail-uncertified, solved but not certified within --tol (the estimate is written
+all the same and the bound printed holds); 2 an error in the input, the flags or the output, with
+a message saying where.";
 
 /// Solve a planar pose graph to global optimality and prove it.
 ///
@@ -52,12 +64,13 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "auto")]
     pub method: Method,
 
-    /// SDP solver for the dual
-    #[arg(long, value_enum, default_value = "ipm")]
-    pub solver: SdpSolver,
+    /// SDP solver for the dual, on the components the sdp method solves (a warning if none)
+    /// [default: ipm]
+    #[arg(long, value_enum)]
+    pub solver: Option<SdpSolver>,
 
     /// Relative suboptimality bound under which the result is called certified
-    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance)]
+    #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance, allow_negative_numbers = true)]
     pub tol: f64,
 
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
@@ -66,6 +79,11 @@ pub struct Args {
     /// estimate is the refined one, which is not certified (check it with pgo-certify)
     #[arg(long)]
     pub refine: bool,
+
+    /// Exit with status 1 when the result is not certified within --tol (the estimate is still
+    /// written); without it, status 0 either way
+    #[arg(long)]
+    pub fail_uncertified: bool,
 
     /// Print the report as one JSON object on stdout (the graph then goes only to -o)
     #[arg(long)]
@@ -131,6 +149,9 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
+    if let Some(path) = &args.output {
+        check_output(path)?;
+    }
     let rec = args.rerun.recorder("pgo-solve")?;
     let t0 = Instant::now();
     let (mut graph, read_report) = args.input.read()?;
@@ -141,7 +162,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     let options = SolveOptions {
         method: args.method,
-        solver: args.solver,
+        solver: args.solver.unwrap_or(SdpSolver::Ipm),
         weights: args.weights.weights,
         tolerance: args.tol,
         refine: args.refine,
@@ -183,6 +204,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             write_s,
         }),
     );
+    if let Some(solver) = args.solver
+        && !solution.components.iter().any(|c| c.method == Method::Sdp)
+    {
+        eprintln!(
+            "pgo-solve: warning: --solver {} had no effect: no component was solved by the SDP (method {})",
+            solver_name(solver),
+            method_text(&solution)
+        );
+    }
     if args.json {
         write_stdout(to_json_line(&report)?.as_bytes())?;
     } else {
@@ -196,13 +226,47 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         near_zero: solution.near_zero_eigenvalues,
     });
     rec.finish()?;
-    Ok(ExitCode::SUCCESS)
+    Ok(if args.fail_uncertified && !solution.certified {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn solver_name(solver: SdpSolver) -> &'static str {
+    match solver {
+        SdpSolver::Ipm => "ipm",
+        SdpSolver::Clarabel => "clarabel",
+    }
+}
+
+/// What ran: `staircase`, `sdp (ipm)`, or per method the number of components it solved;
+/// prefixed by `auto: ` when the method was chosen per component.
+fn method_text(r: &Solution) -> String {
+    let sdp = r
+        .components
+        .iter()
+        .filter(|c| c.method == Method::Sdp)
+        .count();
+    let staircase = r.components.len() - sdp;
+    let sdp_name = format!("sdp ({})", solver_name(r.solver));
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let ran = match (sdp, staircase) {
+        (0, 0) => return r.method.name().to_string(),
+        (_, 0) => sdp_name,
+        (0, _) => "staircase".to_string(),
+        (a, b) => format!("{sdp_name} on {a} component{}, staircase on {b}", plural(a)),
+    };
+    match r.method {
+        Method::Auto => format!("auto: {ran}"),
+        _ => ran,
+    }
 }
 
 fn text_report(input: &str, report: &Report) -> String {
     let r = report.solution;
     let mut out = format!(
-        "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {} (sdp solver {})\n",
+        "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {}\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
         if r.poses == 1 { "" } else { "s" },
@@ -211,11 +275,7 @@ fn text_report(input: &str, report: &Report) -> String {
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),
-        r.method.name(),
-        match r.solver {
-            SdpSolver::Ipm => "ipm",
-            SdpSolver::Clarabel => "clarabel",
-        }
+        method_text(r),
     );
     let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     let chi2_text =

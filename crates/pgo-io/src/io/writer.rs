@@ -141,6 +141,10 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
             .map_err(|e| Error::io(path, e))?;
         return write_named(graph, options, std::io::BufWriter::new(file), path);
     }
+    if target.is_dir() {
+        // Else the rename of the temporary file over it fails with a less telling message.
+        return Err(Error::Invalid(format!("{path}: is a directory")));
+    }
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => std::path::Path::new("."),
