@@ -367,23 +367,36 @@ fn within(suboptimality_bound: f64, cost: f64, tolerance: f64) -> bool {
     suboptimality_bound <= tolerance * cost.abs().max(1.0)
 }
 
-fn sdp_report(part: &PoseGraph, s: &ComponentSolution, tolerance: f64) -> ComponentReport {
-    let suboptimality_bound = s.cost - s.lower_bound;
+/// What every method reports of a component: its cost and proven bound, certified when `proven`
+/// (the method's own condition) holds and the gap is within `tolerance`; the method's own figures
+/// left out.
+#[allow(clippy::too_many_arguments)]
+fn component_report(
+    part: &PoseGraph,
+    method: Method,
+    cost: f64,
+    lower_bound: f64,
+    proven: bool,
+    szep: bool,
+    near_zero_eigenvalues: usize,
+    tolerance: f64,
+) -> ComponentReport {
+    let suboptimality_bound = cost - lower_bound;
     ComponentReport {
         first_id: part.ids[0],
         poses: part.num_poses(),
         edges: part.edges.len(),
-        cost: s.cost,
-        lower_bound: s.lower_bound,
+        cost,
+        lower_bound,
         suboptimality_bound,
-        certified: s.szep && within(suboptimality_bound, s.cost, tolerance),
-        szep: s.szep,
-        near_zero_eigenvalues: s.near_zero,
-        method: Method::Sdp,
-        rounding: Some(s.rounding),
-        penalized_eigenvalues: Some(s.eigenvalues.iter().take(4).copied().collect()),
-        sdp_iterations: Some(s.dual.iterations),
-        sdp_converged: Some(s.dual.converged),
+        certified: proven && within(suboptimality_bound, cost, tolerance),
+        szep,
+        near_zero_eigenvalues,
+        method,
+        rounding: None,
+        penalized_eigenvalues: None,
+        sdp_iterations: None,
+        sdp_converged: None,
         rank: None,
         iterations: None,
         eta: None,
@@ -395,31 +408,41 @@ fn sdp_report(part: &PoseGraph, s: &ComponentSolution, tolerance: f64) -> Compon
     }
 }
 
-fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tolerance: f64) -> ComponentReport {
-    let suboptimality_bound = s.cost - s.lower_bound;
+fn sdp_report(part: &PoseGraph, s: &ComponentSolution, tolerance: f64) -> ComponentReport {
     ComponentReport {
-        first_id: part.ids[0],
-        poses: part.num_poses(),
-        edges: part.edges.len(),
-        cost: s.cost,
-        lower_bound: s.lower_bound,
-        suboptimality_bound,
-        certified: s.bound.is_some() && within(suboptimality_bound, s.cost, tolerance),
-        szep: s.near_zero.is_some_and(|z| z <= 1),
-        near_zero_eigenvalues: s.near_zero.unwrap_or(0),
-        method: Method::Staircase,
-        rounding: None,
-        penalized_eigenvalues: None,
-        sdp_iterations: None,
-        sdp_converged: None,
+        rounding: Some(s.rounding),
+        penalized_eigenvalues: Some(s.eigenvalues.iter().take(4).copied().collect()),
+        sdp_iterations: Some(s.dual.iterations),
+        sdp_converged: Some(s.dual.converged),
+        ..component_report(
+            part,
+            Method::Sdp,
+            s.cost,
+            s.lower_bound,
+            s.szep,
+            s.szep,
+            s.near_zero,
+            tolerance,
+        )
+    }
+}
+
+fn staircase_report(part: &PoseGraph, s: &StaircaseSolution, tolerance: f64) -> ComponentReport {
+    ComponentReport {
         rank: Some(s.rank),
         iterations: Some(s.iterations),
         eta: s.bound.map(|b| b.eta),
         gradient_norm: Some(s.gradient_norm),
-        certified_chi2: None,
-        refined_chi2: None,
-        refine_iterations: None,
-        not_certified_because: None,
+        ..component_report(
+            part,
+            Method::Staircase,
+            s.cost,
+            s.lower_bound,
+            s.bound.is_some(),
+            s.near_zero.is_some_and(|z| z <= 1),
+            s.near_zero.unwrap_or(0),
+            tolerance,
+        )
     }
 }
 
