@@ -23,6 +23,8 @@ complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not
 complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2) before writing it; the report\'s cost and bound stay those of the certified estimate, and chi2 before and after is added'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
 complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'
+complete -c pgo-solve -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
+complete -c pgo-solve -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'
 complete -c pgo-solve -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-solve -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-solve -s V -l version -d 'Print version'

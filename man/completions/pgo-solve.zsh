@@ -41,6 +41,9 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, and chi2 before and after is added]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \
+'-q[No progress display (shown on stderr only when stderr is a terminal)]' \
+'--quiet[No progress display (shown on stderr only when stderr is a terminal)]' \
+'(-q --quiet)--progress[Show the progress even when stderr is not a terminal, as plain lines (for logs)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \

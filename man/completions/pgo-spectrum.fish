@@ -15,6 +15,8 @@ complete -c pgo-spectrum -l strict -d 'Treat unknown tags as errors instead of s
 complete -c pgo-spectrum -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-spectrum -l json -d 'Print one JSON object on stdout'
+complete -c pgo-spectrum -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
+complete -c pgo-spectrum -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'
 complete -c pgo-spectrum -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-spectrum -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-spectrum -s V -l version -d 'Print version'

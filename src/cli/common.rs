@@ -1,5 +1,6 @@
 //! Flags and helpers shared by the tools that read a graph and compute on it.
 
+use crate::cli::progress_bar::Progress;
 use crate::error::Error;
 use crate::graph::PoseGraph;
 use crate::io::{self, Dialect, Format, ReadOptions, ReadReport};
@@ -40,6 +41,12 @@ pub struct InputArgs {
 impl InputArgs {
     /// Reads the graph, printing the reader's warnings.
     pub fn read(&self) -> crate::Result<(PoseGraph, ReadReport)> {
+        self.read_shown(&Progress::off())
+    }
+
+    /// [`InputArgs::read`] as a phase of `progress`.
+    pub fn read_shown(&self, progress: &Progress) -> crate::Result<(PoseGraph, ReadReport)> {
+        progress.phase(&format!("reading {}", display_input(&self.input)));
         let options = ReadOptions {
             format: self.from,
             dialect: self.dialect,
@@ -48,9 +55,14 @@ impl InputArgs {
             allow_indefinite: self.allow_indefinite,
         };
         let (graph, report) = io::read_path(&self.input, &options)?;
-        crate::cli::print_warnings(&report.warnings);
+        progress.suspend(|| crate::cli::print_warnings(&report.warnings));
         Ok((graph, report))
     }
+}
+
+/// An input path as messages show it (`<stdin>` for `-`).
+pub fn display_input(path: &str) -> &str {
+    if path == "-" { "<stdin>" } else { path }
 }
 
 /// The `--weights` flag: isotropic weights from the information matrices by default (the

@@ -29,7 +29,7 @@ Examples:
 #[command(
     name = "pgo-simulate",
     version,
-    after_help = EXAMPLES,
+    after_help = super::after_help(EXAMPLES),
     allow_negative_numbers = true
 )]
 pub struct Args {
@@ -132,6 +132,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         seed: args.seed,
     };
     config.validate()?;
+    io::check_output(&args.output)?;
     let rec = args.rerun.recorder("pgo-simulate")?;
     let sim = simulate(&config);
     rec.graph(&sim.graph);

@@ -2,6 +2,7 @@
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
 use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout};
+use super::progress_bar::ProgressArgs;
 use crate::dual::solver::SdpSolver;
 use crate::spectrum::{Spectrum as Report, SpectrumOptions, spectrum};
 use clap::Parser;
@@ -31,7 +32,7 @@ Examples:
 /// matrix are computed (10 with -k 0), with one sparse factorization per matrix and shift-invert
 /// subspace iteration (M is never formed).
 #[derive(Debug, Parser)]
-#[command(name = "pgo-spectrum", version, after_help = EXAMPLES)]
+#[command(name = "pgo-spectrum", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
@@ -51,6 +52,9 @@ pub struct Args {
     /// Print one JSON object on stdout
     #[arg(long)]
     pub json: bool,
+
+    #[command(flatten)]
+    pub progress: ProgressArgs,
 
     #[command(flatten)]
     pub rerun: RerunArgs,
@@ -74,14 +78,16 @@ pub fn main() -> ExitCode {
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-spectrum")?;
-    let (graph, read_report) = args.input.read()?;
+    let progress = args.progress.start("pgo-spectrum");
+    let (graph, read_report) = args.input.read_shown(&progress)?;
     rec.graph(&graph);
     let options = SpectrumOptions {
         weights: args.weights.weights,
         count: args.count,
         solver: args.solver,
     };
-    let report = spectrum(&graph, &options)?;
+    let report = progress.watch(|| spectrum(&graph, &options))?;
+    progress.finish();
     for c in report.components.iter().filter(|c| !c.eigen_converged) {
         eprintln!(
             "pgo-spectrum: warning: the eigenvalue iteration of the component of pose {} did not converge; its eigenvalues are upper bounds",

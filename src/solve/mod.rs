@@ -186,6 +186,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
             (staircase_report(&part, &solution, options.tolerance), poses)
         };
         if options.refine {
+            crate::progress::phase("refinement (Levenberg-Marquardt)");
             let refined = crate::refine::refine(&part, &poses, &Default::default())?;
             report.certified_chi2 = Some(refined.initial_chi2);
             report.refined_chi2 = Some(refined.chi2);
