@@ -30,7 +30,11 @@ Examples:
 /// SZEP its certificate's (one eigenvalue at zero, proven, when the certificate isolates it),
 /// sdp_converged whether the certificate holds, and only the K smallest eigenvalues of each
 /// matrix are computed (10 with -k 0), with one sparse factorization per matrix and shift-invert
-/// subspace iteration (M is never formed).
+/// subspace iteration (M is never formed). With -k K (1 to 100), components of more than 100
+/// poses are analysed sparse as well whenever that gives the dense answer: when the certificate
+/// proves the estimate optimal with the SZEP (its lambda is then lambda*, the eigenvalues those
+/// of the dense path to about 1e-8 relative); otherwise they are analysed dense. -k 0 (all
+/// eigenvalues) of components of at most 2000 poses is always dense.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-spectrum", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -41,7 +45,8 @@ pub struct Args {
     pub weights: WeightArgs,
 
     /// How many of the smallest eigenvalues to print (0: all, but 10 for components of more
-    /// than 2000 poses, where at most 100 can be asked for)
+    /// than 2000 poses, where at most 100 can be asked for; 1 to 100 are computed sparse for
+    /// components of more than 100 poses, see above)
     #[arg(short = 'k', long = "count", default_value = "0", value_name = "K")]
     pub count: usize,
 
