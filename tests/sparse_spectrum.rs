@@ -46,6 +46,7 @@ fn config(n: usize, loops: f64, noise: f64, seed: u64) -> SimulationConfig {
         rotation_noise: RotationNoise::Gaussian { sigma: noise },
         translation_noise: TranslationNoise::Gaussian { sigma: noise },
         seed,
+        ..Default::default()
     }
 }
 
