@@ -5,7 +5,11 @@
 //! - `n` poses x_i = (p_i, θ_i): positions uniform in the square [0, side)² (the paper: a
 //!   10 m x 10 m square), headings uniform in (−π, π];
 //! - edges: the spanning path (i, i+1) ("odometric edges"), and a loop closure (i, j) for every
-//!   other pair i < j, j > i + 1, independently with probability P_c (the paper: 0.1);
+//!   other pair i < j, j > i + 1, independently with probability P_c (the paper: 0.1) — about
+//!   P_c·n²/2 of them, which is the paper's model for its small n and far too many for large n
+//!   (`pgo-simulate -n 100000` would make 5·10⁸): [`LoopModel::PerPose`] is a model whose loop
+//!   closures grow linearly, each pose j ≥ 2 closing a loop to one earlier pose with probability
+//!   P_c, and [`SimulationConfig::expected_loop_closures`] tells the size beforehand;
 //! - measurements, eq. (47):
 //!
 //! ```text
@@ -37,8 +41,10 @@
 //! ground truth does not depend on P_c or the noise, and the edge set does not depend on the
 //! noise. Draw order within a stream:
 //! - poses: for i = 0..n: x_i, y_i, θ_i;
-//! - loop closures: for i = 0..n, for j = i+2..n: one uniform u, a loop closure iff u < P_c
-//!   (no draws when P_c is 0 or 1);
+//! - loop closures, [`LoopModel::Pairs`]: for i = 0..n, for j = i+2..n: one uniform u, a loop
+//!   closure iff u < P_c (no draws when P_c is 0 or 1); [`LoopModel::PerPose`]: for j = 2..n: one
+//!   uniform u (none when P_c is 0 or 1), and if u < P_c one uniform v, the loop closure
+//!   (⌊v·(j−1)⌋, j) (no draws at all when P_c is 0);
 //! - noise: for every edge in output order: ε_Δ (two normals or two uniforms), then ε_R (a normal
 //!   or a uniform). Normals come in Box-Muller pairs; the second of a pair is kept for the next
 //!   normal. Draws happen also when σ = 0, so σ does not shift the stream.
@@ -71,16 +77,39 @@ pub enum TranslationNoise {
     Uniform { half_width: f64 },
 }
 
+/// Which loop closures are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum LoopModel {
+    /// The paper's model (47): every pair (i, j), j > i + 1, with probability P_c (about
+    /// P_c n^2/2 loop closures: for small n)
+    #[default]
+    Pairs,
+    /// Each pose j >= 2 with probability P_c closes one loop to an earlier pose drawn uniformly
+    /// (about P_c n loop closures: linear in n)
+    PerPose,
+}
+
+impl LoopModel {
+    pub fn name(self) -> &'static str {
+        match self {
+            LoopModel::Pairs => "pairs",
+            LoopModel::PerPose => "per-pose",
+        }
+    }
+}
+
 /// What to simulate. [`Default`] is the paper's setup: n = 10, a 10 m square, P_c = 0.1,
-/// σ_R = σ_Δ = 0.1, seed 0.
+/// σ_R = σ_Δ = 0.1, seed 0, loop closures by pairs (eq. (47)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimulationConfig {
     /// Number of poses (ids 0..n−1).
     pub n: usize,
     /// Side of the square positions are drawn from, [0, side)².
     pub side: f64,
-    /// Probability P_c of a loop closure between two poses that are not consecutive.
+    /// Probability P_c of a loop closure between two poses that are not consecutive (per pair,
+    /// or per pose: [`LoopModel`]).
     pub loop_probability: f64,
+    pub loop_model: LoopModel,
     pub rotation_noise: RotationNoise,
     pub translation_noise: TranslationNoise,
     pub seed: u64,
@@ -92,6 +121,7 @@ impl Default for SimulationConfig {
             n: 10,
             side: 10.0,
             loop_probability: 0.1,
+            loop_model: LoopModel::Pairs,
             rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
             translation_noise: TranslationNoise::Gaussian { sigma: 0.1 },
             seed: 0,
@@ -100,6 +130,39 @@ impl Default for SimulationConfig {
 }
 
 impl SimulationConfig {
+    /// The pairs (i, j), j > i + 1, a loop closure can join: (n−1)(n−2)/2 (as a float: it
+    /// overflows 64-bit integers for the largest n).
+    pub fn candidate_pairs(&self) -> f64 {
+        let n = self.n as f64;
+        if self.n < 3 {
+            0.0
+        } else {
+            (n - 1.0) * (n - 2.0) / 2.0
+        }
+    }
+
+    /// The expected number of loop closures: P_c·(n−1)(n−2)/2 by pairs, P_c·(n−2) per pose.
+    pub fn expected_loop_closures(&self) -> f64 {
+        match self.loop_model {
+            LoopModel::Pairs => self.loop_probability * self.candidate_pairs(),
+            LoopModel::PerPose => self.loop_probability * self.n.saturating_sub(2) as f64,
+        }
+    }
+
+    /// The uniform deviates drawn to choose the loop closures (see the module documentation).
+    pub fn loop_draws(&self) -> f64 {
+        let p = self.loop_probability;
+        match self.loop_model {
+            _ if p == 0.0 => 0.0,
+            LoopModel::Pairs if p == 1.0 => 0.0,
+            LoopModel::Pairs => self.candidate_pairs(),
+            LoopModel::PerPose => {
+                let poses = self.n.saturating_sub(2) as f64;
+                if p == 1.0 { poses } else { poses * (1.0 + p) }
+            }
+        }
+    }
+
     /// Checks every value: n at most 2³¹ (ids must fit g2o's `int`), side finite and positive,
     /// P_c in [0, 1], σ and h finite and non-negative.
     pub fn validate(&self) -> crate::Result<()> {
@@ -170,20 +233,37 @@ pub fn simulate(config: &SimulationConfig) -> Simulated {
         })
         .collect();
 
-    // Topology: the spanning path plus Bernoulli(P_c) loop closures, in ascending (i, j) order.
+    // Topology: the spanning path plus the loop closures, in ascending (i, j) order.
     let p = config.loop_probability;
     let mut pairs: Vec<(usize, usize)> = Vec::new();
-    for i in 0..n {
-        if i + 1 < n {
-            pairs.push((i, i + 1));
-        }
-        if p == 0.0 {
-            continue;
-        }
-        for j in i + 2..n {
-            if p == 1.0 || edge_rng.uniform() < p {
-                pairs.push((i, j));
+    match config.loop_model {
+        LoopModel::Pairs => {
+            for i in 0..n {
+                if i + 1 < n {
+                    pairs.push((i, i + 1));
+                }
+                if p == 0.0 {
+                    continue;
+                }
+                for j in i + 2..n {
+                    if p == 1.0 || edge_rng.uniform() < p {
+                        pairs.push((i, j));
+                    }
+                }
             }
+        }
+        LoopModel::PerPose => {
+            pairs.extend((1..n).map(|j| (j - 1, j)));
+            if p > 0.0 {
+                for j in 2..n {
+                    if p == 1.0 || edge_rng.uniform() < p {
+                        // ⌊v·(j−1)⌋ ≤ j − 2; the clamp only guards the rounding of v·(j−1).
+                        let i = ((edge_rng.uniform() * (j - 1) as f64) as usize).min(j - 2);
+                        pairs.push((i, j));
+                    }
+                }
+            }
+            pairs.sort_unstable();
         }
     }
 
@@ -396,6 +476,67 @@ mod tests {
             .flat_map(|i| (i + 1..7).map(move |j| (i, j)))
             .collect();
         assert_eq!(pairs, all);
+    }
+
+    #[test]
+    fn per_pose_loop_closures_are_linear_distinct_and_reach_back() {
+        let config = SimulationConfig {
+            n: 20_000,
+            loop_model: LoopModel::PerPose,
+            loop_probability: 0.3,
+            ..Default::default()
+        };
+        let s = simulate(&config);
+        let edges = &s.graph.edges;
+        let pairs: Vec<(usize, usize)> = edges.iter().map(|e| (e.i, e.j)).collect();
+        assert!(pairs.windows(2).all(|w| w[0] < w[1]), "ascending, distinct");
+        assert!(pairs.iter().all(|&(i, j)| i < j && j < config.n));
+        let loops: Vec<&(usize, usize)> = pairs.iter().filter(|(i, j)| j - i > 1).collect();
+        assert_eq!(pairs.len() - loops.len(), config.n - 1, "the odometry path");
+        // At most one per pose; Binomial(19998, 0.3): mean 5999.4, sd 64.8.
+        let mut by_pose = vec![0; config.n];
+        for &&(_, j) in &loops {
+            by_pose[j] += 1;
+        }
+        assert!(by_pose.iter().all(|&c| c <= 1));
+        let expected = config.expected_loop_closures();
+        assert!(
+            (loops.len() as f64 - expected).abs() < 5.0 * 64.8,
+            "{}",
+            loops.len()
+        );
+        // i uniform below j − 1: the mean of i/(j−1) is 1/2 (sd 0.29/sqrt(6000) = 0.004).
+        let mean = loops
+            .iter()
+            .map(|&&(i, j)| (i as f64 + 0.5) / (j - 1) as f64)
+            .sum::<f64>()
+            / loops.len() as f64;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
+        // Certain loop closures: one per pose from 2 on.
+        let all = simulate(&SimulationConfig {
+            loop_probability: 1.0,
+            ..config
+        });
+        assert_eq!(all.graph.edges.len(), 2 * config.n - 3);
+    }
+
+    #[test]
+    fn the_expected_size_is_known_before_drawing() {
+        let big = SimulationConfig {
+            n: 100_000,
+            ..Default::default()
+        };
+        assert_eq!(big.candidate_pairs(), 99_999.0 * 99_998.0 / 2.0);
+        assert!((big.expected_loop_closures() - 0.1 * 99_999.0 * 99_998.0 / 2.0).abs() < 1.0);
+        let linear = SimulationConfig {
+            loop_model: LoopModel::PerPose,
+            ..big
+        };
+        assert!((linear.expected_loop_closures() - 0.1 * 99_998.0).abs() < 1e-6);
+        for n in [0, 1, 2] {
+            let c = SimulationConfig { n, ..big };
+            assert_eq!(c.expected_loop_closures(), 0.0);
+        }
     }
 
     #[test]

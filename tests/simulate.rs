@@ -63,6 +63,7 @@ fn config(
         rotation_noise: rot,
         translation_noise: tra,
         seed,
+        ..Default::default()
     }
 }
 
@@ -473,4 +474,67 @@ fn bad_flags_exit_2_with_a_message() {
     let out = simulate_cli(&["-o", "/nonexistent-dir/x.g2o"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).starts_with("pgo-simulate: error: "));
+}
+
+/// Large graphs: the pairs model (47) is refused with its size before anything is drawn (it is
+/// quadratic in n); the per-pose model grows linearly, and its edges follow it (counted by
+/// `pgo-convert --stats`, an independent reader).
+#[test]
+fn large_graphs_are_refused_by_pairs_and_linear_per_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.g2o");
+    let refused = simulate_cli(&["-n", "100000", "-o", out.to_str().unwrap()]);
+    assert_eq!(refused.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    // 0.1 · 99999 · 99998 / 2 = 499985000.1 expected loop closures.
+    assert!(
+        err.starts_with("pgo-simulate: error: -n 100000 with --loop-probability 0.1 makes about 5.000e8 loop closures"),
+        "{err}"
+    );
+    assert!(
+        err.contains("--loop-model per-pose") && err.contains("--force"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1);
+    assert!(!out.exists());
+    // Few expected loop closures but 5e11 pairs to draw: refused too.
+    let err = simulate_cli(&["-n", "1000000", "--loop-probability", "1e-9"]);
+    assert_eq!(err.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&err.stderr).contains("pairs of poses"));
+
+    let (n, p) = (100_000usize, 0.1);
+    let args = [
+        "-n",
+        "100000",
+        "--loop-model",
+        "per-pose",
+        "--loop-probability",
+        "0.1",
+        "--seed",
+        "4",
+    ];
+    let bytes = ok_stdout(&args);
+    assert_eq!(bytes, ok_stdout(&args), "reproducible");
+    let s = stats_json(&bytes);
+    assert_eq!(s["poses"], n);
+    assert_eq!(s["odometry_edges"], n - 1);
+    assert_eq!(s["duplicate_edges"], 0);
+    assert_eq!(s["backward_edges"], 0);
+    assert_eq!(s["components"], 1);
+    // Binomial(n − 2, p): mean 9999.8, standard deviation 94.9.
+    let lc = s["loop_closures"].as_f64().unwrap();
+    assert!((lc - p * (n - 2) as f64).abs() < 5.0 * 94.9, "{lc}");
+    // At most one loop closure ends at each pose, from an earlier one.
+    let g = pgo::io::read(&bytes[..], "sim.g2o", &Default::default())
+        .unwrap()
+        .0;
+    let mut ends = vec![0u8; n];
+    for e in g.edges.iter().filter(|e| e.j != e.i + 1) {
+        assert!(e.i + 1 < e.j);
+        ends[e.j] += 1;
+    }
+    assert!(ends.iter().all(|&c| c <= 1));
+    // The summary names the model.
+    let out = simulate_cli(&["-n", "50", "--loop-model", "per-pose"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("loop probability 0.1 (per-pose)"));
 }

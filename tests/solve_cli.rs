@@ -440,7 +440,10 @@ fn bad_tolerance_and_outputs_are_named_before_the_work() {
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(
         text(&out.stderr),
-        format!("pgo-solve: error: -o {}: is a directory\n", s(dir.0.path()))
+        format!(
+            "pgo-solve: error: {}: is a directory, not a file to write\n",
+            s(dir.0.path())
+        )
     );
     let missing = dir.path("no/such/out.g2o");
     let out = solve(&[&mit, "-o", s(&missing)]);
@@ -448,17 +451,19 @@ fn bad_tolerance_and_outputs_are_named_before_the_work() {
     assert_eq!(
         text(&out.stderr),
         format!(
-            "pgo-solve: error: -o {}: no such directory {}\n",
+            "pgo-solve: error: {}: directory {} does not exist\n",
             s(&missing),
             s(&dir.path("no/such"))
         )
     );
-    // Tools that only write check it when writing.
     let out = run_with_stdin("pgo-convert", &[&mit, "-o", s(dir.0.path())], None);
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(
         text(&out.stderr),
-        format!("pgo-convert: error: {}: is a directory\n", s(dir.0.path()))
+        format!(
+            "pgo-convert: error: {}: is a directory, not a file to write\n",
+            s(dir.0.path())
+        )
     );
     assert!(dir.entries().is_empty());
 }

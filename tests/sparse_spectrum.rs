@@ -46,6 +46,7 @@ fn config(n: usize, loops: f64, noise: f64, seed: u64) -> SimulationConfig {
         rotation_noise: RotationNoise::Gaussian { sigma: noise },
         translation_noise: TranslationNoise::Gaussian { sigma: noise },
         seed,
+        ..Default::default()
     }
 }
 
@@ -174,4 +175,128 @@ fn pgo_spectrum_at_scale_prints_ten_by_default_and_refuses_more_than_a_hundred()
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("-k 101 is more than the 100"), "{stderr}");
     assert!(out.stdout.is_empty());
+}
+
+/// `pgo-spectrum FILE ARGS --json` with RAYON_NUM_THREADS=`threads`.
+fn spectrum_json(
+    path: &std::path::Path,
+    args: &[&str],
+    threads: &str,
+) -> (Vec<u8>, serde_json::Value) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pgo-spectrum"))
+        .arg(path)
+        .args(args)
+        .arg("--json")
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = serde_json::from_slice(&out.stdout).unwrap();
+    (out.stdout, r)
+}
+
+fn floats(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn a_few_eigenvalues_of_a_mid_sized_graph_are_computed_sparse_with_the_dense_answer() {
+    // 300 poses: below the dense limit, above pgo::spectrum::SPARSE_MIN_POSES. -k 6 takes the
+    // sparse path (λ from the staircase's certificate), -k 0 the dense one (λ* from the dual SDP,
+    // every eigenvalue of the dense matrices): the same numbers to 1e-8.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sim.g2o");
+    let graph = simulate(&config(300, 0.01, 0.1, 5)).graph;
+    let options = pgo::io::WriteOptions {
+        format: pgo::io::Format::G2o,
+        dialect: pgo::io::Dialect::G2o,
+    };
+    pgo::io::write_path(&graph, options, path.to_str().unwrap()).unwrap();
+    let (bytes, sparse) = spectrum_json(&path, &["-k", "6"], "2");
+    assert_eq!(
+        bytes,
+        spectrum_json(&path, &["-k", "6"], "1").0,
+        "thread count"
+    );
+    let (_, dense) = spectrum_json(&path, &["-k", "0"], "2");
+    for key in [
+        "eigenvalues",
+        "penalized_eigenvalues",
+        "rotation_eigenvalues",
+    ] {
+        let all = floats(&dense[key]);
+        assert_eq!(
+            all.len(),
+            if key == "rotation_eigenvalues" {
+                300
+            } else {
+                599
+            }
+        );
+        assert_agree(key, &floats(&sparse[key]), &all, 6);
+    }
+    for key in [
+        "near_zero",
+        "szep",
+        "tree",
+        "balanced",
+        "sdp_converged",
+        "poses",
+    ] {
+        assert_eq!(sparse[key], dense[key], "{key}");
+    }
+    assert_eq!(sparse["near_zero"], 1);
+    // Proven bounds on the same optimum: both below the cost of the optimum, equal to 1e-6.
+    let bound = |r: &serde_json::Value| r["components"][0]["lower_bound"].as_f64().unwrap();
+    assert!((bound(&sparse) - bound(&dense)).abs() <= 1e-6 * bound(&dense).abs());
+    // The sparse path did run: its λ is the staircase's, not the SDP's.
+    assert_ne!(
+        sparse["components"][0]["lambda"],
+        dense["components"][0]["lambda"]
+    );
+}
+
+#[test]
+fn without_a_certificate_a_mid_sized_graph_is_analysed_dense() {
+    // Uninformative rotations: the relaxation is not exact (two eigenvalues of W(λ*) at zero),
+    // the staircase cannot certify, and -k 4 gives exactly the first four of -k 0.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sim.g2o");
+    let mut cfg = config(120, 0.05, 0.0, 1);
+    cfg.side = 10.0;
+    cfg.rotation_noise = RotationNoise::Uniform;
+    cfg.translation_noise = TranslationNoise::Uniform { half_width: 5.0 };
+    let graph = simulate(&cfg).graph;
+    let options = pgo::io::WriteOptions {
+        format: pgo::io::Format::G2o,
+        dialect: pgo::io::Dialect::G2o,
+    };
+    pgo::io::write_path(&graph, options, path.to_str().unwrap()).unwrap();
+    let (_, few) = spectrum_json(&path, &["-k", "4", "--weights", "unit"], "2");
+    let (_, all) = spectrum_json(&path, &["-k", "0", "--weights", "unit"], "2");
+    assert_eq!(few["szep"], false);
+    for key in [
+        "eigenvalues",
+        "penalized_eigenvalues",
+        "rotation_eigenvalues",
+    ] {
+        let (a, b) = (floats(&few[key]), floats(&all[key]));
+        assert_eq!(bits(&a), bits(&b[..4]), "{key}");
+    }
+    assert_eq!(
+        few["components"][0]["lambda"],
+        all["components"][0]["lambda"]
+    );
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
 }

@@ -23,7 +23,7 @@ _pgo__certify() {
 
     case "${cmd}" in
         pgo__certify)
-            opts="-h -V --from --dialect --strict --ignore-equiv --allow-indefinite --estimate --weights --tol --json --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-q -h -V --from --dialect --strict --ignore-equiv --allow-indefinite --estimate --weights --tol --json --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0

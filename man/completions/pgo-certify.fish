@@ -14,6 +14,8 @@ complete -c pgo-certify -l strict -d 'Treat unknown tags as errors instead of sk
 complete -c pgo-certify -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-certify -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-certify -l json -d 'Print the report as one JSON object on stdout'
+complete -c pgo-certify -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
+complete -c pgo-certify -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'
 complete -c pgo-certify -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-certify -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-certify -s V -l version -d 'Print version'

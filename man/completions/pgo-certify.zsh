@@ -31,6 +31,9 @@ isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync a
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--json[Print the report as one JSON object on stdout]' \
+'-q[No progress display (shown on stderr only when stderr is a terminal)]' \
+'--quiet[No progress display (shown on stderr only when stderr is a terminal)]' \
+'(-q --quiet)--progress[Show the progress even when stderr is not a terminal, as plain lines (for logs)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \

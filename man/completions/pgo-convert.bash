@@ -23,7 +23,7 @@ _pgo__convert() {
 
     case "${cmd}" in
         pgo__convert)
-            opts="-o -q -h -V --output --from --to --dialect --to-dialect --reindex --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-o -q -h -V --output --from --to --dialect --to-dialect --reindex --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0

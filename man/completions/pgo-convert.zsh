@@ -38,8 +38,9 @@ g2o-cov\:"Covariance, g2o order"))' \
 '--stats[Print statistics (poses, edges, odometry and loop closures, components, ids, duplicates) instead of converting]' \
 '--json[With --stats\: one JSON object on stdout]' \
 '--timings[Print the time spent reading and writing on stderr]' \
-'-q[Do not print the summary line on stderr (warnings are still printed)]' \
-'--quiet[Do not print the summary line on stderr (warnings are still printed)]' \
+'-q[Do not print the summary line on stderr (warnings are still printed), nor the progress display (shown on stderr only when stderr is a terminal)]' \
+'--quiet[Do not print the summary line on stderr (warnings are still printed), nor the progress display (shown on stderr only when stderr is a terminal)]' \
+'(-q --quiet)--progress[Show the progress even when stderr is not a terminal, as plain lines (for logs)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \

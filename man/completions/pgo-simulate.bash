@@ -23,7 +23,7 @@ _pgo__simulate() {
 
     case "${cmd}" in
         pgo__simulate)
-            opts="-n -o -q -h -V --poses --loop-probability --rotation-noise --translation-noise --seed --side --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -39,6 +39,10 @@ _pgo__simulate() {
                     ;;
                 --loop-probability)
                     COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --loop-model)
+                    COMPREPLY=($(compgen -W "pairs per-pose" -- "${cur}"))
                     return 0
                     ;;
                 --rotation-noise)

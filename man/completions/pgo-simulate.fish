@@ -1,5 +1,7 @@
 complete -c pgo-simulate -s n -l poses -d 'Number of poses (ids 0..N-1)' -r
-complete -c pgo-simulate -l loop-probability -d 'Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently' -r
+complete -c pgo-simulate -l loop-probability -d 'Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose)' -r
+complete -c pgo-simulate -l loop-model -d 'Which loop closures are drawn' -r -f -a "pairs\t'The paper\'s model (47): every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures: for small n)'
+per-pose\t'Each pose j >= 2 with probability P_c closes one loop to an earlier pose drawn uniformly (about P_c n loop closures: linear in n)'"
 complete -c pgo-simulate -l rotation-noise -d 'Rotation noise e_R: gaussian:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi])' -r
 complete -c pgo-simulate -l translation-noise -d 'Translation noise e_Delta: gaussian:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform:HALFWIDTH (uniform in [-HALFWIDTH, HALFWIDTH]^2)' -r
 complete -c pgo-simulate -l seed -d 'Seed of the random number generator (any 64-bit unsigned integer)' -r
@@ -9,6 +11,7 @@ complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s ex
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
 complete -c pgo-simulate -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-simulate -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
+complete -c pgo-simulate -l force -d 'Generate however many loop closures the pairs model makes (see Size below)'
 complete -c pgo-simulate -s q -l quiet -d 'Do not print the summary line on stderr'
 complete -c pgo-simulate -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-simulate -s h -l help -d 'Print help (see more with \'--help\')'

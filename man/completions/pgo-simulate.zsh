@@ -17,7 +17,9 @@ _pgo-simulate() {
     _arguments "${_arguments_options[@]}" : \
 '-n+[Number of poses (ids 0..N-1)]:N:_default' \
 '--poses=[Number of poses (ids 0..N-1)]:N:_default' \
-'--loop-probability=[Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently]:P:_default' \
+'--loop-probability=[Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose)]:P:_default' \
+'--loop-model=[Which loop closures are drawn]:MODEL:((pairs\:"The paper'\''s model (47)\: every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures\: for small n)"
+per-pose\:"Each pose j >= 2 with probability P_c closes one loop to an earlier pose drawn uniformly (about P_c n loop closures\: linear in n)"))' \
 '--rotation-noise=[Rotation noise e_R\: gaussian\:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi\])]:SPEC:_default' \
 '--translation-noise=[Translation noise e_Delta\: gaussian\:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform\:HALFWIDTH (uniform in \[-HALFWIDTH, HALFWIDTH\]^2)]:SPEC:_default' \
 '--seed=[Seed of the random number generator (any 64-bit unsigned integer)]:S:_default' \
@@ -28,6 +30,7 @@ _pgo-simulate() {
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
+'--force[Generate however many loop closures the pairs model makes (see Size below)]' \
 '-q[Do not print the summary line on stderr]' \
 '--quiet[Do not print the summary line on stderr]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \

@@ -24,6 +24,8 @@ complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-M
 complete -c pgo-solve -l fail-uncertified -d 'Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
 complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'
+complete -c pgo-solve -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
+complete -c pgo-solve -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'
 complete -c pgo-solve -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-solve -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-solve -s V -l version -d 'Print version'

@@ -42,6 +42,9 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--fail-uncertified[Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \
+'-q[No progress display (shown on stderr only when stderr is a terminal)]' \
+'--quiet[No progress display (shown on stderr only when stderr is a terminal)]' \
+'(-q --quiet)--progress[Show the progress even when stderr is not a terminal, as plain lines (for logs)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \

@@ -23,7 +23,7 @@ _pgo__spectrum() {
 
     case "${cmd}" in
         pgo__spectrum)
-            opts="-k -h -V --from --dialect --strict --ignore-equiv --allow-indefinite --weights --count --solver --json --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-k -q -h -V --from --dialect --strict --ignore-equiv --allow-indefinite --weights --count --solver --json --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0

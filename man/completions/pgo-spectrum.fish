@@ -6,7 +6,7 @@ toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as 
 g2o-cov\t'Covariance, g2o order'"
 complete -c pgo-spectrum -l weights -d 'Edge weights: unit (the paper\'s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)' -r -f -a "unit\t'τ = κ = 1: exactly the paper\'s cost (5)/(8)'
 isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)'"
-complete -c pgo-spectrum -s k -l count -d 'How many of the smallest eigenvalues to print (0: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for)' -r
+complete -c pgo-spectrum -s k -l count -d 'How many of the smallest eigenvalues to print (0: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for; 1 to 100 are computed sparse for components of more than 100 poses, see above)' -r
 complete -c pgo-spectrum -l solver -d 'SDP solver for the dual (components of at most 2000 poses)' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'
 clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `clarabel-sdp`)'"
 complete -c pgo-spectrum -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
@@ -15,6 +15,8 @@ complete -c pgo-spectrum -l strict -d 'Treat unknown tags as errors instead of s
 complete -c pgo-spectrum -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-spectrum -l json -d 'Print one JSON object on stdout'
+complete -c pgo-spectrum -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
+complete -c pgo-spectrum -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'
 complete -c pgo-spectrum -l rerun-spawn -d 'Start a rerun viewer (the `rerun` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it'
 complete -c pgo-spectrum -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c pgo-spectrum -s V -l version -d 'Print version'

@@ -23,8 +23,8 @@ toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D
 g2o-cov\:"Covariance, g2o order"))' \
 '--weights=[Edge weights\: unit (the paper'\''s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth\: the SE-Sync/CPL-SLAM objective)]:POLICY:((unit\:"τ = κ = 1\: exactly the paper'\''s cost (5)/(8)"
 isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)"))' \
-'-k+[How many of the smallest eigenvalues to print (0\: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for)]:K:_default' \
-'--count=[How many of the smallest eigenvalues to print (0\: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for)]:K:_default' \
+'-k+[How many of the smallest eigenvalues to print (0\: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for; 1 to 100 are computed sparse for components of more than 100 poses, see above)]:K:_default' \
+'--count=[How many of the smallest eigenvalues to print (0\: all, but 10 for components of more than 2000 poses, where at most 100 can be asked for; 1 to 100 are computed sparse for components of more than 100 poses, see above)]:K:_default' \
 '--solver=[SDP solver for the dual (components of at most 2000 poses)]:SOLVER:((ipm\:"The dedicated primal-dual interior-point method (default build)"
 clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \`clarabel-sdp\`)"))' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
@@ -33,6 +33,9 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--json[Print one JSON object on stdout]' \
+'-q[No progress display (shown on stderr only when stderr is a terminal)]' \
+'--quiet[No progress display (shown on stderr only when stderr is a terminal)]' \
+'(-q --quiet)--progress[Show the progress even when stderr is not a terminal, as plain lines (for logs)]' \
 '--rerun-spawn[Start a rerun viewer (the \`rerun\` executable on PATH, e.g. from PyPI rerun-sdk==0.36.3) and stream the recording to it]' \
 '-h[Print help (see more with '\''--help'\'')]' \
 '--help[Print help (see more with '\''--help'\'')]' \

@@ -2,6 +2,7 @@
 //! pgo-solve).
 
 use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout};
+use super::progress_bar::ProgressArgs;
 use crate::error::Error;
 use crate::graph::Pose2;
 use crate::io::{self, ReadOptions};
@@ -39,7 +40,7 @@ Exit status: 0 certified within --tol, 1 not certified (the bound printed still 
 /// how far its cost is above the optimum of f (intel: about 4% relative): that answer is right.
 /// The estimate pgo-solve writes without --refine is the one that can be certified.
 #[derive(Debug, Parser)]
-#[command(name = "pgo-certify", version, after_help = EXAMPLES)]
+#[command(name = "pgo-certify", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
@@ -59,6 +60,9 @@ pub struct Args {
     /// Print the report as one JSON object on stdout
     #[arg(long)]
     pub json: bool,
+
+    #[command(flatten)]
+    pub progress: ProgressArgs,
 
     #[command(flatten)]
     pub rerun: RerunArgs,
@@ -82,7 +86,8 @@ pub fn main() -> ExitCode {
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-certify")?;
-    let (graph, read_report) = args.input.read()?;
+    let progress = args.progress.start("pgo-certify");
+    let (graph, read_report) = args.input.read_shown(&progress)?;
     let poses = match &args.estimate {
         None => {
             if !graph.vertices_declared {
@@ -93,14 +98,18 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             }
             graph.poses.clone()
         }
-        Some(path) => estimate_poses(&graph, path)?,
+        Some(path) => {
+            progress.phase(&format!("reading {path}"));
+            progress.suspend(|| estimate_poses(&graph, path))?
+        }
     };
     let options = CertifyOptions {
         weights: args.weights.weights,
         tolerance: args.tol,
     };
     let source = args.estimate.as_deref().unwrap_or(&args.input.input);
-    let report = certify_estimate(&graph, &poses, &options, source)?;
+    let report = progress.watch(|| certify_estimate(&graph, &poses, &options, source))?;
+    progress.finish();
     // The estimate as the graph to view, and the certificate as a text entry.
     let mut estimate = graph.clone();
     estimate.poses = poses;

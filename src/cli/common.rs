@@ -1,5 +1,6 @@
 //! Flags and helpers shared by the tools that read a graph and compute on it.
 
+use crate::cli::progress_bar::Progress;
 use crate::error::Error;
 use crate::graph::PoseGraph;
 use crate::io::{self, Dialect, Format, ReadOptions, ReadReport};
@@ -40,6 +41,12 @@ pub struct InputArgs {
 impl InputArgs {
     /// Reads the graph, printing the reader's warnings.
     pub fn read(&self) -> crate::Result<(PoseGraph, ReadReport)> {
+        self.read_shown(&Progress::off())
+    }
+
+    /// [`InputArgs::read`] as a phase of `progress`.
+    pub fn read_shown(&self, progress: &Progress) -> crate::Result<(PoseGraph, ReadReport)> {
+        progress.phase(&format!("reading {}", display_input(&self.input)));
         let options = ReadOptions {
             format: self.from,
             dialect: self.dialect,
@@ -48,9 +55,14 @@ impl InputArgs {
             allow_indefinite: self.allow_indefinite,
         };
         let (graph, report) = io::read_path(&self.input, &options)?;
-        crate::cli::print_warnings(&report.warnings);
+        progress.suspend(|| crate::cli::print_warnings(&report.warnings));
         Ok((graph, report))
     }
+}
+
+/// An input path as messages show it (`<stdin>` for `-`).
+pub fn display_input(path: &str) -> &str {
+    if path == "-" { "<stdin>" } else { path }
 }
 
 /// The `--weights` flag: isotropic weights from the information matrices by default (the
@@ -114,29 +126,6 @@ pub fn parse_tolerance(s: &str) -> Result<f64, String> {
     } else {
         Err(format!("--tol must be a finite number >= 0, found {s}"))
     }
-}
-
-/// Checks, before the work, that `-o PATH` can be a graph file: not a directory, in a directory
-/// that exists (`-` is stdout).
-pub fn check_output(path: &str) -> crate::Result<()> {
-    if path == "-" {
-        return Ok(());
-    }
-    let target = std::path::Path::new(path);
-    if target.is_dir() {
-        return Err(Error::Invalid(format!("-o {path}: is a directory")));
-    }
-    let dir = match target.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
-    if !dir.is_dir() {
-        return Err(Error::Invalid(format!(
-            "-o {path}: no such directory {}",
-            dir.display()
-        )));
-    }
-    Ok(())
 }
 
 /// Serializes a report as one line of JSON.

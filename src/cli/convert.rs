@@ -1,6 +1,7 @@
 //! `pgo-convert`: g2o <-> TORO conversion, dialects, statistics.
 
 use super::common::{RerunArgs, to_json_line, write_stdout};
+use super::progress_bar::Progress;
 use crate::error::Error;
 use crate::graph::NoiseKind;
 use crate::io::{self, Dialect, Format, ReadOptions, WriteOptions};
@@ -27,7 +28,7 @@ Examples:
 /// composed along a spanning tree from the smallest id. Errors are reported as PATH:LINE:COL:
 /// message with exit status 2; an output file is replaced only once completely written.
 #[derive(Debug, Parser)]
-#[command(name = "pgo-convert", version, after_help = EXAMPLES)]
+#[command(name = "pgo-convert", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
     /// Input file, or - for stdin
     #[arg(value_name = "IN")]
@@ -92,9 +93,14 @@ pub struct Args {
     #[arg(long)]
     pub timings: bool,
 
-    /// Do not print the summary line on stderr (warnings are still printed)
+    /// Do not print the summary line on stderr (warnings are still printed), nor the progress
+    /// display (shown on stderr only when stderr is a terminal)
     #[arg(short, long)]
     pub quiet: bool,
+
+    /// Show the progress even when stderr is not a terminal, as plain lines (for logs)
+    #[arg(long, conflicts_with = "quiet")]
+    pub progress: bool,
 
     #[command(flatten)]
     pub rerun: RerunArgs,
@@ -115,11 +121,16 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         ignore_equiv: args.ignore_equiv || args.stats,
         allow_indefinite: args.allow_indefinite,
     };
+    if !args.stats {
+        io::check_output(&args.output)?;
+    }
     let rec = args.rerun.recorder("pgo-convert")?;
+    let progress = Progress::start("pgo-convert", args.quiet, args.progress);
+    progress.phase(&format!("reading {}", display_name(&args.input, "<stdin>")));
     let t0 = Instant::now();
     let (mut graph, report) = io::read_path(&args.input, &options)?;
     let read_s = t0.elapsed().as_secs_f64();
-    crate::cli::print_warnings(&report.warnings);
+    progress.suspend(|| crate::cli::print_warnings(&report.warnings));
     rec.graph(&graph);
 
     let input_summary = format!(
@@ -139,6 +150,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     );
 
     if args.stats {
+        progress.finish();
         let stats = GraphStats::new(&graph, &report);
         let text = if args.json {
             to_json_line(&stats)?
@@ -174,8 +186,13 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         graph.reindex();
     }
     let t1 = Instant::now();
+    progress.phase(&format!(
+        "writing {}",
+        display_name(&args.output, "<stdout>")
+    ));
     io::write_path(&graph, WriteOptions { format, dialect }, &args.output)?;
     let write_s = t1.elapsed().as_secs_f64();
+    progress.finish();
     if !args.quiet {
         let conversion = match (converted, dialect.noise()) {
             (false, _) => "",

@@ -1,10 +1,14 @@
 //! The command-line tools: their flags (clap definitions, also used to generate the man pages) and
 //! their entry points. Exit status: 0 success, 1 a negative answer (e.g. not certified), 2 an
-//! error in the input or the request (docs/method.md §4).
+//! error in the input or the request (docs/method.md §4), 141 a closed pipe on stdout (silently);
+//! SIGINT, SIGTERM and SIGHUP remove the temporary output files and end the tool by the signal
+//! (the shell reports 130, 143, 129): [`signals`].
 
 pub mod certify;
 pub mod common;
 pub mod convert;
+pub mod progress_bar;
+pub mod signals;
 pub mod simulate;
 pub mod solve;
 pub mod spectrum;
@@ -26,14 +30,31 @@ pub fn commands() -> Vec<clap::Command> {
 /// Exit status for errors in the input or the request.
 pub const EXIT_ERROR: u8 = 2;
 
+/// What every tool's help says after its examples: closed pipes, interrupts, the progress
+/// display.
+pub const SHARED_HELP: &str = "\
+A closed pipe on stdout (| head) ends the tool with exit status 141 (128 + SIGPIPE, as the shell
+reports a tool killed by SIGPIPE), without a message. SIGINT, SIGTERM and SIGHUP remove the
+temporary file of an output being written and end the tool by the signal (the shell reports 130,
+143, 129). Outputs are checked before the work starts (the directory exists and takes a file, the
+path is no directory), and written to a temporary file renamed into place when complete.";
+
+/// A tool's `after_help`: its examples, then [`SHARED_HELP`].
+pub fn after_help(examples: &str) -> String {
+    format!("{examples}\n\n{SHARED_HELP}")
+}
+
 /// Runs a tool body: prints an error as `pgo-TOOL: message` (input errors already carry
-/// `PATH:LINE:COL`) and maps it to exit status 2.
+/// `PATH:LINE:COL`) and maps it to exit status 2; a closed pipe is status 141, silently.
+/// Interrupts are handled from here on ([`signals::install`]).
 pub fn run_tool(name: &str, body: impl FnOnce() -> crate::Result<ExitCode>) -> ExitCode {
+    signals::install();
     match body() {
         Ok(code) => code,
         Err(crate::Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::BrokenPipe => {
-            // A closed pipe downstream (`| head`) is not an error of ours.
-            ExitCode::SUCCESS
+            // A closed pipe downstream (`| head`) is not an error to print, and not a success:
+            // the status a tool killed by SIGPIPE has in the shell.
+            ExitCode::from(signals::BROKEN_PIPE)
         }
         // Input errors read `PATH:LINE:COL: error: message`, as compilers print them.
         Err(crate::Error::Parse(e)) => {

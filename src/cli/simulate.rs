@@ -1,8 +1,9 @@
 //! `pgo-simulate`: random planar pose graphs by the paper's simulation model (Sec. 6, eq. (47)).
 
 use super::common::RerunArgs;
+use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
-use crate::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
+use crate::simulate::{LoopModel, RotationNoise, SimulationConfig, TranslationNoise, simulate};
 use clap::Parser;
 use std::process::ExitCode;
 
@@ -13,13 +14,21 @@ Examples:
   pgo-simulate --rotation-noise uniform --seed 3  uninformative rotations
   pgo-simulate --translation-noise uniform:5      translation noise uniform in [-5, 5]^2
   pgo-simulate --rotation-noise gaussian:0 --translation-noise gaussian:0   a balanced graph
-  for s in $(seq 1 100); do pgo-simulate --seed $s -o run$s.g2o; done   100 Monte Carlo runs";
+  for s in $(seq 1 100); do pgo-simulate --seed $s -o run$s.g2o; done   100 Monte Carlo runs
+  pgo-simulate -n 1000000 --loop-model per-pose --loop-probability 0.05 -o big.g2o
+
+Size: the paper's model draws a loop closure for every pair of poses, about P_c n^2/2 of them:
+-n 100000 would make 5e8 edges (about 45 GB of g2o text). Graphs of more than 10^7 expected
+loop closures, or more than 10^10 pairs to draw, are refused with their size unless --force is
+given; --loop-model per-pose grows linearly (about P_c n loop closures).";
 
 /// Generate a random planar pose graph by the simulation model of Calafiore, Carlone and Dellaert
 /// (Sec. 6, eq. (47)), reproducibly.
 ///
 /// Poses: positions uniform in a square [0, L)^2, headings uniform in (-pi, pi]. Edges: the
-/// spanning path (i, i+1) plus a loop closure between every other pair with probability P_c.
+/// spanning path (i, i+1) plus a loop closure between every other pair with probability P_c (or,
+/// with --loop-model per-pose, for large graphs: one loop closure from each pose j >= 2 to an
+/// earlier pose drawn uniformly, with probability P_c).
 /// Measurements: Delta_ij = R_i^T (p_j - p_i) + e_Delta, R_ij = R_i^T R_j R(e_R), angles wrapped
 /// to (-pi, pi]. Every information matrix is the identity, so unit weights give the paper's cost.
 /// The vertex lines hold the ground truth. The same seed and flags give the same file, byte for
@@ -29,7 +38,7 @@ Examples:
 #[command(
     name = "pgo-simulate",
     version,
-    after_help = EXAMPLES,
+    after_help = super::after_help(EXAMPLES),
     allow_negative_numbers = true
 )]
 pub struct Args {
@@ -38,9 +47,17 @@ pub struct Args {
     pub n: usize,
 
     /// Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair
-    /// independently
+    /// independently (per pose with --loop-model per-pose)
     #[arg(long, value_name = "P", default_value = "0.1", value_parser = parse_probability)]
     pub loop_probability: f64,
+
+    /// Which loop closures are drawn
+    #[arg(long, value_enum, value_name = "MODEL", default_value = "pairs")]
+    pub loop_model: LoopModel,
+
+    /// Generate however many loop closures the pairs model makes (see Size below)
+    #[arg(long)]
+    pub force: bool,
 
     /// Rotation noise e_R: gaussian:SIGMA (normal, standard deviation SIGMA radians) or uniform
     /// (uniform in (-pi, pi])
@@ -127,11 +144,16 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         n: args.n,
         side: args.side,
         loop_probability: args.loop_probability,
+        loop_model: args.loop_model,
         rotation_noise: args.rotation_noise,
         translation_noise: args.translation_noise,
         seed: args.seed,
     };
     config.validate()?;
+    if !args.force {
+        check_size(&config)?;
+    }
+    io::check_output(&args.output)?;
     let rec = args.rerun.recorder("pgo-simulate")?;
     let sim = simulate(&config);
     rec.graph(&sim.graph);
@@ -145,7 +167,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         let odometry = config.n - 1;
         let loops = sim.graph.edges.len() - odometry;
         eprintln!(
-            "pgo-simulate: {} pose{}, {} edge{} ({odometry} odometry, {loops} loop closure{}); seed {}, loop probability {}, rotation noise {}, translation noise {}, side {} -> {}: format {format}",
+            "pgo-simulate: {} pose{}, {} edge{} ({odometry} odometry, {loops} loop closure{}); seed {}, loop probability {}{}, rotation noise {}, translation noise {}, side {} -> {}: format {format}",
             config.n,
             if config.n == 1 { "" } else { "s" },
             sim.graph.edges.len(),
@@ -153,6 +175,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             if loops == 1 { "" } else { "s" },
             config.seed,
             config.loop_probability,
+            match config.loop_model {
+                LoopModel::Pairs => String::new(),
+                model => format!(" ({})", model.name()),
+            },
             config.rotation_noise,
             config.translation_noise,
             config.side,
@@ -165,4 +191,43 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     rec.finish()?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Expected loop closures beyond which a graph is refused without --force (about 0.9 GB of g2o
+/// text and 1 GB of memory).
+pub const MAX_EXPECTED_LOOP_CLOSURES: f64 = 1e7;
+/// Pairs beyond which the pairs model's draws are refused without --force (one random number
+/// each: minutes).
+pub const MAX_LOOP_DRAWS: f64 = 1e10;
+
+/// Refuses a graph of the pairs model whose loop closures would not fit a sensible run, saying
+/// how large it would be.
+fn check_size(config: &SimulationConfig) -> crate::Result<()> {
+    if config.loop_model != LoopModel::Pairs {
+        // Linear in n: as large as the user asked for.
+        return Ok(());
+    }
+    let expected = config.expected_loop_closures();
+    let draws = config.loop_draws();
+    if expected <= MAX_EXPECTED_LOOP_CLOSURES && draws <= MAX_LOOP_DRAWS {
+        return Ok(());
+    }
+    // About 90 bytes of g2o text per edge line, 104 bytes of memory per edge (the edge and its
+    // pair).
+    let gb = |bytes_per_edge: f64| expected * bytes_per_edge / 1e9;
+    let size = if expected > MAX_EXPECTED_LOOP_CLOSURES {
+        format!(
+            "makes about {expected:.3e} loop closures (P_c (n-1)(n-2)/2 by pairs; about {:.0} GB of g2o text and {:.0} GB of memory)",
+            gb(90.0),
+            gb(104.0)
+        )
+    } else {
+        format!(
+            "draws a random number for each of the {draws:.3e} pairs of poses (for {expected:.3e} loop closures)"
+        )
+    };
+    Err(Error::Invalid(format!(
+        "-n {} with --loop-probability {} {size}: use --loop-model per-pose (about P_c n loop closures, linear in n) or a smaller --loop-probability, or pass --force",
+        config.n, config.loop_probability
+    )))
 }

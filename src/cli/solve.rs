@@ -1,9 +1,9 @@
 //! `pgo-solve`: the globally optimal estimate of a pose graph and the bound that proves it.
 
 use super::common::{
-    InputArgs, RerunArgs, WeightArgs, check_dense_size, check_output, num, to_json_line,
-    write_stdout,
+    InputArgs, RerunArgs, WeightArgs, check_dense_size, num, to_json_line, write_stdout,
 };
+use super::progress_bar::ProgressArgs;
 use crate::dual::rounding::Rounding;
 use crate::dual::solver::SdpSolver;
 use crate::error::Error;
@@ -44,7 +44,7 @@ a message saying where.";
 /// their difference, which bounds the suboptimality; "certified" means that bound is within
 /// --tol. Each connected component is solved on its own.
 #[derive(Debug, Parser)]
-#[command(name = "pgo-solve", version, after_help = EXAMPLES)]
+#[command(name = "pgo-solve", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
@@ -92,6 +92,9 @@ pub struct Args {
     /// Leave the timings out of the report (for byte-identical output)
     #[arg(long)]
     pub no_timings: bool,
+
+    #[command(flatten)]
+    pub progress: ProgressArgs,
 
     #[command(flatten)]
     pub rerun: RerunArgs,
@@ -149,12 +152,19 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
-    if let Some(path) = &args.output {
-        check_output(path)?;
+    let output = match (&args.output, args.json) {
+        (Some(o), _) => Some(o.as_str()),
+        (None, false) => Some("-"),
+        (None, true) => None,
+    };
+    // Before the work: a solve of minutes must not end in "directory does not exist".
+    if let Some(path) = output {
+        io::check_output(path)?;
     }
     let rec = args.rerun.recorder("pgo-solve")?;
+    let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
-    let (mut graph, read_report) = args.input.read()?;
+    let (mut graph, read_report) = args.input.read_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
     rec.graph(&graph);
     if args.method == Method::Sdp {
@@ -169,31 +179,30 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         ..Default::default()
     };
     let t1 = Instant::now();
-    let solution = rec.observe(|| solve(&graph, &options))?;
+    let solution = progress.watch(|| rec.observe(|| solve(&graph, &options)))?;
     let solve_s = t1.elapsed().as_secs_f64();
     graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
     rec.optimized(&graph, options.weights);
 
     let t2 = Instant::now();
-    let output = match (&args.output, args.json) {
-        (Some(o), _) => Some(o.as_str()),
-        (None, false) => Some("-"),
-        (None, true) => None,
+    // A write that fails after all (a full disk) is reported after the report, never instead.
+    let written = match output {
+        Some(path) => {
+            let format = args
+                .to
+                .or_else(|| Format::from_extension(path))
+                .unwrap_or(read_report.format);
+            progress.phase(&format!(
+                "writing {}",
+                if path == "-" { "<stdout>" } else { path }
+            ));
+            write_graph(&mut graph, path, format)
+        }
+        None => Ok(()),
     };
-    if let Some(path) = output {
-        let format = args
-            .to
-            .or_else(|| Format::from_extension(path))
-            .unwrap_or(read_report.format);
-        // The output holds information matrices, in the format's own order.
-        graph
-            .convert_noise(crate::graph::NoiseKind::Information)
-            .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
-        let dialect = format.default_dialect();
-        io::write_path(&graph, WriteOptions { format, dialect }, path)?;
-    }
     let write_s = t2.elapsed().as_secs_f64();
+    progress.finish();
 
     let report = Report::new(
         &solution,
@@ -226,6 +235,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         near_zero: solution.near_zero_eigenvalues,
     });
     rec.finish()?;
+    written?;
     Ok(if args.fail_uncertified && !solution.certified {
         ExitCode::from(1)
     } else {
@@ -261,6 +271,21 @@ fn method_text(r: &Solution) -> String {
         Method::Auto => format!("auto: {ran}"),
         _ => ran,
     }
+}
+
+/// Writes the solved graph to `path` in `format`.
+fn write_graph(
+    graph: &mut crate::graph::PoseGraph,
+    path: &str,
+    format: Format,
+) -> crate::Result<()> {
+    // The output holds information matrices, in the format's own order.
+    graph
+        .convert_noise(crate::graph::NoiseKind::Information)
+        .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
+    let dialect = format.default_dialect();
+    io::write_path(graph, WriteOptions { format, dialect }, path)?;
+    Ok(())
 }
 
 fn text_report(input: &str, report: &Report) -> String {

@@ -2,6 +2,7 @@
 //! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
 
 use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout};
+use super::progress_bar::ProgressArgs;
 use crate::dual::solver::SdpSolver;
 use crate::spectrum::{Spectrum as Report, SpectrumOptions, spectrum};
 use clap::Parser;
@@ -29,9 +30,13 @@ Examples:
 /// SZEP its certificate's (one eigenvalue at zero, proven, when the certificate isolates it),
 /// sdp_converged whether the certificate holds, and only the K smallest eigenvalues of each
 /// matrix are computed (10 with -k 0), with one sparse factorization per matrix and shift-invert
-/// subspace iteration (M is never formed).
+/// subspace iteration (M is never formed). With -k K (1 to 100), components of more than 100
+/// poses are analysed sparse as well whenever that gives the dense answer: when the certificate
+/// proves the estimate optimal with the SZEP (its lambda is then lambda*, the eigenvalues those
+/// of the dense path to about 1e-8 relative); otherwise they are analysed dense. -k 0 (all
+/// eigenvalues) of components of at most 2000 poses is always dense.
 #[derive(Debug, Parser)]
-#[command(name = "pgo-spectrum", version, after_help = EXAMPLES)]
+#[command(name = "pgo-spectrum", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
     #[command(flatten)]
     pub input: InputArgs,
@@ -40,7 +45,8 @@ pub struct Args {
     pub weights: WeightArgs,
 
     /// How many of the smallest eigenvalues to print (0: all, but 10 for components of more
-    /// than 2000 poses, where at most 100 can be asked for)
+    /// than 2000 poses, where at most 100 can be asked for; 1 to 100 are computed sparse for
+    /// components of more than 100 poses, see above)
     #[arg(short = 'k', long = "count", default_value = "0", value_name = "K")]
     pub count: usize,
 
@@ -51,6 +57,9 @@ pub struct Args {
     /// Print one JSON object on stdout
     #[arg(long)]
     pub json: bool,
+
+    #[command(flatten)]
+    pub progress: ProgressArgs,
 
     #[command(flatten)]
     pub rerun: RerunArgs,
@@ -74,14 +83,16 @@ pub fn main() -> ExitCode {
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-spectrum")?;
-    let (graph, read_report) = args.input.read()?;
+    let progress = args.progress.start("pgo-spectrum");
+    let (graph, read_report) = args.input.read_shown(&progress)?;
     rec.graph(&graph);
     let options = SpectrumOptions {
         weights: args.weights.weights,
         count: args.count,
         solver: args.solver,
     };
-    let report = spectrum(&graph, &options)?;
+    let report = progress.watch(|| spectrum(&graph, &options))?;
+    progress.finish();
     for c in report.components.iter().filter(|c| !c.eigen_converged) {
         eprintln!(
             "pgo-spectrum: warning: the eigenvalue iteration of the component of pose {} did not converge; its eigenvalues are upper bounds",

@@ -123,9 +123,11 @@ pub fn analyze(
         })
         .collect();
     let (matrix, m) = matrices(graph, &normalized, weights)?;
+    crate::progress::phase("dual SDP");
     let t = Instant::now();
     let dual = solve_dual(&m, solver).map_err(|e| Error::Invalid(e.to_string()))?;
     let sdp_seconds = t.elapsed().as_secs_f64();
+    crate::progress::phase("certificate");
     let bound =
         dual_bound(&matrix, &dual.lambda).ok_or_else(|| singular_laplacian(graph, weights))?;
     let threshold = zero_threshold(&matrix, dual.primal_objective - dual.dual_objective);

@@ -268,6 +268,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         report.certified_chi2 = Some(crate::refine::chi2(&part, &poses)).filter(|c| c.is_finite());
         if options.refine {
             // Levenberg-Marquardt holds the FIX pose (or pose 0) where it is.
+            crate::progress::phase("refinement (Levenberg-Marquardt)");
             let refined = crate::refine::refine(&part, &poses, &Default::default())?;
             report.refined_chi2 = Some(refined.chi2);
             report.refine_iterations = Some(refined.iterations);

@@ -167,6 +167,7 @@ pub fn scalable_spectrum(
         solve_anchored(graph, weights, &StaircaseOptions::default(), &mut |_| {})
             .ok_or_else(|| crate::problem::checks::singular_laplacian(graph, weights))?;
     let lambda = anchored.graph_order(&solution.lambda);
+    crate::progress::phase("eigenvalues");
     let spectra = sparse_spectra(graph, weights, &lambda, count)?;
     let near_zero = solution.near_zero.unwrap_or_else(|| {
         let gap = (solution.cost - solution.lower_bound).max(0.0);

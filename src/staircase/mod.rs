@@ -235,6 +235,7 @@ pub fn solve_anchored(
 ) -> Option<(StaircaseSolution, Anchored)> {
     // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
     // or its spanning-tree composition for edges-only files), so the problem is built once.
+    crate::progress::phase("initialization (chordal)");
     let anchored = Anchored::centered(graph, weights, &graph.poses);
     let r = chordal_rotations(&anchored.problem)?;
     let start = Point {
@@ -269,6 +270,7 @@ pub fn certify_estimate(
     poses: &[Pose2],
     reach: f64,
 ) -> EstimateCertificate {
+    crate::progress::phase("certificate");
     let anchored = Anchored::centered(graph, weights, poses);
     let problem = &anchored.problem;
     let x = anchored.point(poses);
@@ -519,6 +521,7 @@ pub fn solve_from(
     // (Appendix 8.8) stop at a saddle of rank 5 and end at rank 6 with a relaxation λ 6.5e-8 less
     // accurate, one of its two zero eigenvalues of W(λ*) lost.
     let mut positions = OptimalPositions::new(problem);
+    crate::progress::phase("Newton");
     let mut local = optimize(problem, positions.as_mut(), start, options, observer);
     let mut iterations = local.iterations;
     let eta_max = |cost: f64| options.tolerance * cost.max(1.0) / n as f64;
@@ -532,6 +535,7 @@ pub fn solve_from(
     // negative eigenvalue of W̃(λ): a saddle, or a relaxation that is not exact) calls for the
     // staircase.
     let reach_1 = reach(&certifier, &local);
+    crate::progress::phase("certificate");
     let mut first = certifier.certify(problem, &local.point, &local.lambda, reach_1);
     if certifier.isolated
         && first
@@ -585,6 +589,7 @@ pub fn solve_from(
             break;
         };
         rank += 1;
+        crate::progress::phase(&format!("staircase rank {rank}"));
         local = optimize(problem, None, next, &budget(iterations), observer);
         iterations += local.iterations;
         let polished = optimize(
@@ -599,6 +604,7 @@ pub fn solve_from(
             best = polished;
         }
         let reach_p = reach(&certifier, &best);
+        crate::progress::phase("certificate");
         if let Some(bound) = certifier.certify(problem, &best.point, &best.lambda, reach_p) {
             return finish(
                 best,
@@ -613,6 +619,7 @@ pub fn solve_from(
     }
     // No certificate: the relaxation's bound at the last rank (converged tightly for it), or the
     // estimate's own λ with whatever η makes W̃(λ) + ηP ⪰ 0 — whichever is higher.
+    crate::progress::phase("bound");
     let mut bound = None;
     let mut relaxed_lambda = None;
     if rank > 1 {

@@ -18,6 +18,8 @@ pub struct Inner {
     save: Option<(String, tempfile::NamedTempFile, BinaryStreamStorage)>,
     /// URLs of the viewers streamed to.
     viewers: Vec<String>,
+    /// The temporary `.rrd` file, listed for removal if the tool is interrupted.
+    _listed: Option<crate::io::Pending>,
 }
 
 /// Logs entities; cheap to clone (for [`super::Recorder::observe`]).
@@ -57,7 +59,13 @@ impl Inner {
                     .prefix(".pgo-")
                     .suffix(".rrd.tmp")
                     .tempfile_in(dir)
-                    .map_err(|e| invalid(format!("--rerun-save {path}: {e}")))?;
+                    .map_err(|e| {
+                        // The OS's reason, without the temporary file's name.
+                        let e = e
+                            .raw_os_error()
+                            .map_or(e, std::io::Error::from_raw_os_error);
+                        invalid(format!("--rerun-save {path}: {e}"))
+                    })?;
                 Some((path.clone(), tmp))
             }
             None => None,
@@ -68,6 +76,9 @@ impl Inner {
             .map_err(|e| invalid(format!("cannot start the rerun recording: {e}")))?;
 
         let mut sinks: Vec<Box<dyn LogSink>> = Vec::new();
+        let listed = file
+            .as_ref()
+            .map(|(_, tmp)| crate::io::Pending::list(tmp.path()));
         let save = file.map(|(path, tmp)| {
             let (sink, storage) = BinaryStreamSink::new(rec.clone());
             sinks.push(Box::new(sink));
@@ -106,6 +117,7 @@ impl Inner {
             },
             save,
             viewers: viewers.into_iter().map(|(url, _)| url).collect(),
+            _listed: listed,
         }))
     }
 
@@ -131,6 +143,7 @@ impl Inner {
             sink,
             save,
             viewers,
+            _listed,
         } = self;
         if let Err(e) = blueprint(&sink.paths.borrow()).send(
             &sink.rec,

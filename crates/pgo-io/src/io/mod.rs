@@ -17,7 +17,9 @@ mod writer;
 
 pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
-pub use writer::{WriteOptions, format_f64, write, write_path};
+pub use writer::{
+    Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_path,
+};
 
 use crate::graph::NoiseKind;
 use std::fmt;

@@ -6,6 +6,7 @@ use super::{Dialect, Format, g2o, toro};
 use crate::error::Error;
 use crate::graph::PoseGraph;
 use std::io::Write;
+use std::path::{Path, PathBuf};
 
 /// How to write a graph.
 #[derive(Debug, Clone, Copy)]
@@ -120,15 +121,84 @@ fn check_finite(graph: &PoseGraph) -> crate::Result<()> {
     Ok(())
 }
 
+/// The directory a file `path` is written in (through a temporary file there).
+fn directory_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// The error of an operation on a temporary file, without the temporary file's name (messages
+/// name the user's path only).
+fn without_path(e: std::io::Error) -> std::io::Error {
+    match e.raw_os_error() {
+        Some(code) => std::io::Error::from_raw_os_error(code),
+        None => std::io::Error::new(e.kind(), e.kind().to_string()),
+    }
+}
+
+/// Checks, before any long work, that [`write_path`] can write `path`: `-` (stdout) and an
+/// existing device or FIFO (written in place) always can; otherwise `path` must not be (or end
+/// like) a directory, and its directory must exist and let a file be created there (a probe file
+/// is created and removed at once, as the temporary file of the write will be). A write can
+/// still fail later (a full disk); this catches the mistakes of the command line.
+pub fn check_output(path: &str) -> crate::Result<()> {
+    if path == "-" {
+        return Ok(());
+    }
+    let fail = |what: String| Error::io(path, std::io::Error::other(what));
+    let target = Path::new(path);
+    if path.ends_with('/') || path.ends_with(std::path::MAIN_SEPARATOR) {
+        return Err(fail("is a directory, not a file to write".into()));
+    }
+    match std::fs::metadata(target) {
+        Ok(meta) if meta.is_dir() => {
+            return Err(fail("is a directory, not a file to write".into()));
+        }
+        Ok(meta) if !meta.is_file() => return Ok(()),
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(Error::io(path, e)),
+    }
+    let dir = directory_of(target);
+    match std::fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => {}
+        Ok(_) => return Err(fail(format!("{} is not a directory", dir.display()))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(fail(format!("directory {} does not exist", dir.display())));
+        }
+        Err(e) => return Err(fail(format!("directory {}: {e}", dir.display()))),
+    }
+    tempfile::Builder::new()
+        .prefix(".pgo-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map(|probe| {
+            // Listed too: an interrupt in between leaves nothing either.
+            let _listed = Pending::list(probe.path());
+            drop(probe);
+        })
+        .map_err(|e| {
+            fail(format!(
+                "cannot create a file in directory {}: {}",
+                dir.display(),
+                without_path(e)
+            ))
+        })
+}
+
 /// Writes `graph` to `path` (stdout for `-`). A file is written to a temporary file in the same
 /// directory and renamed over `path` only once complete, so a failure never leaves a partial or
-/// truncated file.
+/// truncated file; while it exists, the temporary file is listed for
+/// [`remove_temporary_files`] (a tool's interrupt handler). Errors name `path`, never the
+/// temporary file.
 pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate::Result<()> {
     if path == "-" {
         let stdout = std::io::stdout();
         return write_named(graph, options, stdout.lock(), "<stdout>");
     }
-    let target = std::path::Path::new(path);
+    let target = Path::new(path);
     // A device or a FIFO (/dev/null, /dev/stdout, a named pipe) is written in place: renaming a
     // temporary file over it would replace the device with a regular file.
     if let Ok(meta) = std::fs::metadata(target)
@@ -145,19 +215,58 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
         // Else the rename of the temporary file over it fails with a less telling message.
         return Err(Error::Invalid(format!("{path}: is a directory")));
     }
-    let dir = match target.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
+    let io = |e| Error::io(path, without_path(e));
     let tmp = tempfile::Builder::new()
         .prefix(".pgo-")
         .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+        .tempfile_in(directory_of(target))
+        .map_err(io)?;
+    let _listed = Pending::list(tmp.path());
     write_named(graph, options, std::io::BufWriter::new(tmp.as_file()), path)?;
-    set_default_permissions(tmp.path()).map_err(|e| Error::io(path, e))?;
-    tmp.persist(target).map_err(|e| Error::io(path, e.error))?;
+    set_default_permissions(tmp.path()).map_err(io)?;
+    tmp.persist(target).map_err(|e| io(e.error))?;
     Ok(())
+}
+
+/// The temporary files being written now, for [`remove_temporary_files`].
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    PENDING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// A temporary file listed in [`PENDING`] while this lives.
+pub struct Pending(PathBuf);
+
+impl Pending {
+    /// Lists `path` (an absolute path, so that it stays right whatever the working directory)
+    /// until the returned value is dropped.
+    pub fn list(path: &Path) -> Self {
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        pending().push(path.clone());
+        Pending(path)
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        let mut list = pending();
+        if let Some(k) = list.iter().rposition(|p| *p == self.0) {
+            list.swap_remove(k);
+        }
+    }
+}
+
+/// Removes the temporary files being written now (by [`write_path`], or listed with
+/// [`Pending::list`]): what an interrupted tool calls before it ends, so that no hidden
+/// `.pgo-*.tmp` file is left behind. Returns how many were removed.
+pub fn remove_temporary_files() -> usize {
+    let list = pending();
+    list.iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count()
 }
 
 /// Temporary files are created private (0600); a written graph gets the usual 0644.
@@ -175,6 +284,56 @@ fn set_default_permissions(_: &std::path::Path) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_are_checked_and_errors_name_the_users_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().to_str().unwrap();
+        assert!(check_output("-").is_ok());
+        assert!(check_output(&format!("{d}/out.g2o")).is_ok());
+        for (path, says) in [
+            (format!("{d}/no/such/out.g2o"), "does not exist"),
+            (d.to_string(), "is a directory"),
+            (format!("{d}/new/"), "is a directory"),
+        ] {
+            let e = check_output(&path).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{path}: ")), "{e}");
+            assert!(e.contains(says), "{e}");
+            assert!(!e.contains(".pgo-"), "{e}");
+        }
+        // The probe leaves nothing.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        // A write that fails names the user's path, not the temporary file.
+        let graph = PoseGraph::with_edges(vec![crate::graph::Pose2::IDENTITY], vec![]);
+        let options = WriteOptions {
+            format: Format::G2o,
+            dialect: Dialect::G2o,
+        };
+        let path = format!("{d}/missing/out.g2o");
+        let e = write_path(&graph, options, &path).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("{path}: ")) && !e.contains(".pgo-"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn listed_temporary_files_are_removed_on_request_and_unlisted_when_dropped() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join(".pgo-a.tmp");
+        let b = dir.path().join(".pgo-b.tmp");
+        std::fs::write(&a, "a").unwrap();
+        std::fs::write(&b, "b").unwrap();
+        let listed_a = Pending::list(&a);
+        {
+            let _listed_b = Pending::list(&b);
+        }
+        // b is no longer listed: only a is removed.
+        assert!(remove_temporary_files() >= 1);
+        assert!(!a.exists() && b.exists());
+        drop(listed_a);
+        assert!(!pending().iter().any(|p| p.starts_with(dir.path())));
+    }
 
     fn fmt(v: f64) -> String {
         let mut out = Vec::new();
