@@ -470,3 +470,130 @@ fn parser_reads_commands_comments_and_markers() {
         "pgo-solve x.g2o -o y.g2o"
     );
 }
+
+/// The field names the README's "JSON reports" section gives for `tool`: every backticked
+/// lower-case identifier of its paragraph (values are in quotes, not backticks).
+fn documented_fields(readme: &str, tool: &str) -> std::collections::BTreeSet<String> {
+    let section = readme
+        .split("### JSON reports")
+        .nth(1)
+        .expect("README.md has a section `### JSON reports`");
+    let section = section.split("\n#").next().unwrap();
+    let paragraph = section
+        .split("\n\n")
+        .find(|p| p.trim_start().starts_with(&format!("**{tool}")))
+        .unwrap_or_else(|| panic!("README.md's JSON reports section has no paragraph for {tool}"));
+    let paragraph = paragraph
+        .split_once("**:")
+        .map_or(paragraph, |(_, rest)| rest);
+    paragraph
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|w| {
+            !w.is_empty()
+                && w.chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// Every key of the JSON objects printed (top level, `components[]`, `timings`).
+fn printed_fields(json: &[u8], into: &mut std::collections::BTreeSet<String>) {
+    for line in String::from_utf8_lossy(json).lines() {
+        let value: serde_json::Value = serde_json::from_str(line).unwrap();
+        let object = value.as_object().unwrap();
+        into.extend(object.keys().cloned());
+        for component in object
+            .get("components")
+            .and_then(|c| c.as_array())
+            .into_iter()
+            .flatten()
+        {
+            into.extend(component.as_object().unwrap().keys().cloned());
+        }
+        if let Some(t) = object.get("timings").and_then(|t| t.as_object()) {
+            into.extend(t.keys().cloned());
+        }
+    }
+}
+
+/// The README's list of `--json` fields is what the tools print, both ways: no field printed
+/// that the README does not name, and no field named that none of these runs prints (each run
+/// chosen to bring out the optional fields: refinement, a reader's warning, a graph that is not
+/// certified, both methods, an estimate that certifies itself).
+#[test]
+fn json_reports_are_documented() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let with_warning = dir.path().join("warning.g2o");
+    let mut text = std::fs::read_to_string(root().join("datasets/MIT.g2o")).unwrap();
+    text.push_str("UNKNOWN_TAG 1 2 3\n");
+    std::fs::write(&with_warning, text).unwrap();
+    let solved = dir.path().join("solved.g2o");
+    let (mit, toy) = ("datasets/MIT.g2o", "datasets/paper_toy.g2o");
+    let warning = with_warning.to_str().unwrap();
+    let solved_path = solved.to_str().unwrap();
+    // (tool, input, flags): each chosen to bring out optional fields.
+    let runs: [(&str, &[(&str, &str)]); 4] = [
+        (
+            "pgo-solve",
+            &[
+                (mit, "--refine -o /dev/null"),
+                (mit, "--method staircase --refine"),
+                (warning, "--no-timings"),
+                (toy, "--weights unit"),
+            ],
+        ),
+        (
+            "pgo-certify",
+            &[
+                (mit, ""),
+                (mit, "--estimate SOLVED"),
+                (warning, ""),
+                (toy, "--weights unit"),
+            ],
+        ),
+        (
+            "pgo-spectrum",
+            &[(mit, "-k 3"), (warning, "-k 3"), (toy, "--weights unit")],
+        ),
+        ("pgo-convert", &[(mit, "--stats"), (warning, "--stats")]),
+    ];
+    let out = Command::new(bin_dir().join("pgo-solve"))
+        .current_dir(root())
+        .args([mit, "-o", solved_path])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    for (tool, cases) in runs {
+        let mut printed = std::collections::BTreeSet::new();
+        for (input, flags) in cases {
+            let flags = flags.replace("SOLVED", solved_path);
+            let out = Command::new(bin_dir().join(tool))
+                .current_dir(root())
+                .arg(input)
+                .args(flags.split_whitespace())
+                .arg("--json")
+                .output()
+                .unwrap();
+            assert!(
+                matches!(out.status.code(), Some(0 | 1)),
+                "{tool} {input} {flags}: {out:?}"
+            );
+            printed_fields(&out.stdout, &mut printed);
+        }
+        let documented = documented_fields(&readme, tool);
+        let undocumented: Vec<_> = printed.difference(&documented).collect();
+        let never_printed: Vec<_> = documented.difference(&printed).collect();
+        assert!(
+            undocumented.is_empty(),
+            "{tool} --json prints fields README.md's JSON reports section does not name: {undocumented:?}"
+        );
+        assert!(
+            never_printed.is_empty(),
+            "README.md's JSON reports section names {tool} fields no run printed: {never_printed:?}"
+        );
+    }
+}
