@@ -339,3 +339,87 @@ fn the_toy_graph_through_the_staircase() {
     assert!(s.rank > 1 && !s.certified);
     assert_eq!(s.near_zero, Some(2));
 }
+
+#[test]
+fn the_work_budget_stops_the_staircase_with_a_sound_bound() {
+    // The toy graph climbs to rank > 1 (above). Under any budget the bound stays below d* =
+    // 5.560697 and the cost above it (weak duality, Theorem 1); a budget of 0 stops at rank 1,
+    // one of twice the work the full run
+    // used changes nothing (a quarter of a budget is kept for the bound), and a smaller one stops no higher.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
+    let (g, _) = pgo::io::read_path(path, &Default::default()).unwrap();
+    let w = edge_weights(&g, Weights::Unit).unwrap();
+    let run = |budget: f64| {
+        let options = StaircaseOptions {
+            staircase_budget: budget,
+            ..Default::default()
+        };
+        solve_graph(&g, &w, &options, &mut |_| {}).unwrap().0
+    };
+    let full = run(StaircaseOptions::default().staircase_budget);
+    assert!(full.rank > 1 && !full.limit_reached && full.staircase_work > 0.0);
+    let same = run(2.0 * full.staircase_work);
+    assert_eq!(
+        (same.rank, same.cost, same.lower_bound),
+        (full.rank, full.cost, full.lower_bound)
+    );
+    for budget in [0.0, full.staircase_work / 10.0] {
+        let s = run(budget);
+        assert!(s.limit_reached, "budget {budget}: {s:?}");
+        assert!(s.rank <= full.rank, "budget {budget}: rank {}", s.rank);
+        assert!(s.lower_bound <= 5.5606973, "{}", s.lower_bound);
+        assert!(s.cost >= 5.560697, "{}", s.cost);
+        assert!(!s.certified);
+    }
+    assert_eq!(run(0.0).rank, 1);
+}
+
+#[test]
+fn pgo_solve_reports_the_staircase_limits() {
+    let toy = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
+    let solve = |flags: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_pgo-solve"))
+            .args([
+                toy,
+                "--weights",
+                "unit",
+                "--method",
+                "staircase",
+                "--json",
+                "--no-timings",
+            ])
+            .args(flags)
+            .output()
+            .unwrap()
+    };
+    let field = |out: &std::process::Output, key: &str| -> serde_json::Value {
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["components"][0][key].clone()
+    };
+    let out = solve(&["--staircase-budget", "0"]);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(field(&out, "rank"), 1);
+    let why = field(&out, "not_certified_because");
+    assert!(
+        why.as_str()
+            .unwrap()
+            .contains("work budget reached (--staircase-budget 0"),
+        "{why}"
+    );
+    let out = solve(&["--max-rank", "2"]);
+    assert_eq!(field(&out, "rank"), 2);
+    assert!(
+        field(&out, "not_certified_because")
+            .as_str()
+            .unwrap()
+            .contains("rank limit 2")
+    );
+    for bad in [
+        &["--staircase-budget", "-1"][..],
+        &["--staircase-budget", "x"],
+        &["--max-rank", "0"],
+    ] {
+        let out = solve(bad);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {out:?}");
+    }
+}

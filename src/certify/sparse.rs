@@ -66,6 +66,12 @@ pub struct SparseBound {
 }
 
 impl SparseCertifier {
+    /// The real multiply-adds of one of its factorizations (four per complex one), counted from
+    /// the symbolic structure ([`SparseFactor::multiply_adds`]).
+    pub fn factorization_work(&self) -> f64 {
+        4.0 * self.factor.multiply_adds()
+    }
+
     /// Analyzes the pattern of W̃ (upper triangle entries, diagonal included, as in
     /// [`crate::problem::rank_p::Problem::upper`]) once, rows in a fill-reducing `order`; every later certificate reuses it.
     pub fn new(dim: usize, upper: &[(usize, usize, c64)], order: &[usize]) -> Self {

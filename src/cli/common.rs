@@ -128,6 +128,18 @@ pub fn parse_tolerance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The value of `--staircase-budget`: a finite number ≥ 0.
+pub fn parse_budget(s: &str) -> Result<f64, String> {
+    let t: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if t.is_finite() && t >= 0.0 {
+        Ok(t)
+    } else {
+        Err(format!(
+            "--staircase-budget must be a finite number >= 0, found {s}"
+        ))
+    }
+}
+
 /// Serializes a report as one line of JSON.
 pub fn to_json_line<T: serde::Serialize>(value: &T) -> crate::Result<String> {
     let mut s = serde_json::to_string(value)

@@ -73,6 +73,22 @@ pub struct Args {
     #[arg(long, default_value = "1e-6", value_name = "REL", value_parser = super::common::parse_tolerance, allow_negative_numbers = true)]
     pub tol: f64,
 
+    /// The staircase's largest rank: where the certificate fails at rank 1, the scalable solver
+    /// lifts the estimate to ranks 2..P (docs/method.md §3.2); a larger P can find better
+    /// estimates and tighter bounds where the relaxation is not exact, at a cost that grows as
+    /// P³ per Newton step
+    #[arg(long, default_value = "6", value_name = "P", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_rank: u32,
+
+    /// The staircase's work above rank 1 at most, in 10⁹ multiply-adds of its sparse
+    /// factorizations (Newton steps, certificate attempts), counted from the factors' structure
+    /// and not timed, so the answer is the same on every machine; about 20 per second on one
+    /// core. Past it the solver reports the best estimate and bound it reached and why it
+    /// stopped. Graphs of a few hundred poses never reach the default; long false loop closures
+    /// (outliers) fill the factors and reach it in seconds (try --robust)
+    #[arg(long, default_value = "200", value_name = "GMA", value_parser = super::common::parse_budget, allow_negative_numbers = true)]
+    pub staircase_budget: f64,
+
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
     /// matrices (g2o's chi2) before writing it; the report's cost and bound stay those of the
     /// certified estimate, chi2 before and after is added, and the report says that the written
@@ -176,6 +192,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         weights: args.weights.weights,
         tolerance: args.tol,
         refine: args.refine,
+        max_rank: args.max_rank as usize,
+        staircase_budget: args.staircase_budget * 1e9,
         ..Default::default()
     };
     let t1 = Instant::now();

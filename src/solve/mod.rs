@@ -70,9 +70,9 @@ pub struct SolveOptions {
     pub refine: bool,
     /// The staircase's largest rank ([`StaircaseOptions::max_rank`], default 6).
     pub max_rank: usize,
-    /// The staircase's Newton iterations above rank 1, all ranks together
-    /// ([`StaircaseOptions::max_staircase_iterations`], default 100).
-    pub max_staircase_iterations: usize,
+    /// The staircase's work above rank 1 at most, in real multiply-adds of its factorizations
+    /// ([`StaircaseOptions::staircase_budget`], default [`crate::staircase::STAIRCASE_BUDGET`]).
+    pub staircase_budget: f64,
 }
 
 impl Default for SolveOptions {
@@ -84,7 +84,7 @@ impl Default for SolveOptions {
             tolerance: 1e-6,
             refine: false,
             max_rank: StaircaseOptions::default().max_rank,
-            max_staircase_iterations: StaircaseOptions::default().max_staircase_iterations,
+            staircase_budget: StaircaseOptions::default().staircase_budget,
         }
     }
 }
@@ -202,7 +202,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
     let staircase = StaircaseOptions {
         tolerance: options.tolerance,
         max_rank: options.max_rank,
-        max_staircase_iterations: options.max_staircase_iterations,
+        staircase_budget: options.staircase_budget,
         ..Default::default()
     };
     for (part, members, _) in graph.components() {
@@ -495,8 +495,9 @@ fn reason(
         }
         if s.limit_reached {
             why.push(format!(
-                "staircase: iteration limit {} reached",
-                staircase.max_staircase_iterations
+                "staircase: work budget reached (--staircase-budget {}: {:e} multiply-adds of its factorizations)",
+                staircase.staircase_budget / 1e9,
+                staircase.staircase_budget
             ));
         }
         if s.rank >= staircase.max_rank {

@@ -58,11 +58,17 @@ pub struct StaircaseOptions {
     pub max_iterations: usize,
     /// The largest rank of the staircase.
     pub max_rank: usize,
-    /// Newton iterations of the staircase above rank 1, all ranks together, at most (each one is
-    /// a sparse factorization, whose fill grows with long loop closures: on a graph with many
-    /// false ones the staircase ran for minutes). Past it the staircase stops and reports the
-    /// best estimate and bound it reached, with [`StaircaseSolution::limit_reached`].
-    pub max_staircase_iterations: usize,
+    /// The work of the staircase above rank 1 at most, in real multiply-adds of its sparse
+    /// factorizations (Newton steps at every rank, the rank-1 polish of each rounding, the
+    /// certificate attempts and the final bound's optimization): counted from the factors'
+    /// structure ([`SparseFactor::multiply_adds`]), not timed, so the limit and the answer are
+    /// the same on every machine. A Newton step at rank p factors a system of the rank-1
+    /// pattern with blocks (4p − 1)/3 times as wide ([`step_work`]), and long false loop
+    /// closures fill the factor: on manhattan with 1000 of them one step at rank 4 took 10 s and
+    /// the staircase ran for minutes. Past the budget the staircase stops and reports the best
+    /// estimate and the bound it reached, with [`StaircaseSolution::limit_reached`]; graphs of a
+    /// few hundred poses never reach the default.
+    pub staircase_budget: f64,
 }
 
 impl Default for StaircaseOptions {
@@ -71,9 +77,22 @@ impl Default for StaircaseOptions {
             tolerance: 1e-6,
             max_iterations: 200,
             max_rank: 6,
-            max_staircase_iterations: 100,
+            staircase_budget: STAIRCASE_BUDGET,
         }
     }
+}
+
+/// [`StaircaseOptions::staircase_budget`]'s default: 2·10¹¹ multiply-adds, about 10 s on one
+/// core of a 2026 x86 machine.
+pub const STAIRCASE_BUDGET: f64 = 2e11;
+
+/// The work of one Newton step at rank p in Newton steps at rank 1: the Newton system keeps the
+/// pattern of W̃ at every rank, with blocks of 4p − 1 tangent coordinates per pose (2p for the
+/// position, 2p − 1 for the rotation on the sphere |r_i| = 1) in place of 3, so its sparse
+/// factorization takes ((4p − 1)/3)³ times the multiply-adds (rank 2: 12.7, rank 3: 49,
+/// rank 4: 125).
+pub fn step_work(p: usize) -> f64 {
+    ((4 * p - 1) as f64 / 3.0).powi(3)
 }
 
 /// The result of the local optimization at one rank.
@@ -114,7 +133,10 @@ pub struct StaircaseSolution {
     /// (Prop. 10) as far as double precision can tell. `None` if the
     /// LDLᴴ met a zero pivot.
     pub near_zero: Option<usize>,
-    /// Whether the staircase stopped at [`StaircaseOptions::max_staircase_iterations`].
+    /// The work of the staircase above rank 1, in multiply-adds
+    /// ([`StaircaseOptions::staircase_budget`]).
+    pub staircase_work: f64,
+    /// Whether the staircase stopped at [`StaircaseOptions::staircase_budget`].
     pub limit_reached: bool,
 }
 
@@ -569,19 +591,35 @@ pub fn solve_from(
     let mut best = local.clone();
     let mut rank = 1;
     let mut escape_factor: Option<SparseFactor<c64>> = None;
-    let start_iterations = iterations;
     let mut limit_reached = false;
-    // The Newton iterations left of the staircase's budget, as per-call limits.
-    let budget = |used: usize| StaircaseOptions {
+    // The work so far (multiply-adds), and what is left of the budget as a limit on the Newton
+    // steps of the next call at rank p.
+    let rank_1_step = NewtonSystem::new(problem, &TangentBasis::new(problem, &local.point))
+        .factor
+        .multiply_adds();
+    let certificate_step = certifier.factorization_work();
+    let factorizations_before = certifier.factorizations;
+    let mut newton_work = 0.0;
+    let work = |newton_work: f64, certifier: &SparseCertifier| {
+        newton_work + (certifier.factorizations - factorizations_before) as f64 * certificate_step
+    };
+    let budget = |work: f64, p: usize| StaircaseOptions {
         max_iterations: options.max_iterations.min(
-            options
-                .max_staircase_iterations
-                .saturating_sub(used - start_iterations),
+            ((options.staircase_budget - work) / (rank_1_step * step_work(p))).max(0.0) as usize,
         ),
         ..*options
     };
+    // A quarter of the budget is kept for the bound at the last rank (its multipliers make a
+    // useful bound only once the rank-p point has converged).
+    let reserved = options.staircase_budget / 4.0;
+    // Whether the budget, not convergence, ended a call.
+    let cut = |limit: &StaircaseOptions, local: &Local| {
+        !local.converged
+            && local.iterations >= limit.max_iterations
+            && limit.max_iterations < options.max_iterations
+    };
     while rank < options.max_rank {
-        if iterations - start_iterations >= options.max_staircase_iterations {
+        if budget(reserved + work(newton_work, &certifier), rank + 1).max_iterations == 0 {
             limit_reached = true;
             break;
         }
@@ -590,23 +628,29 @@ pub fn solve_from(
         };
         rank += 1;
         crate::progress::phase(&format!("staircase rank {rank}"));
-        local = optimize(problem, None, next, &budget(iterations), observer);
+        let limit = budget(reserved + work(newton_work, &certifier), rank);
+        local = optimize(problem, None, next, &limit, observer);
+        limit_reached |= cut(&limit, &local);
         iterations += local.iterations;
+        newton_work += local.iterations as f64 * rank_1_step * step_work(rank);
+        let limit = budget(reserved + work(newton_work, &certifier), 1);
         let polished = optimize(
             problem,
             positions.as_mut(),
             round_to_rank_one(problem, &local.point),
-            &budget(iterations),
+            &limit,
             observer,
         );
+        limit_reached |= cut(&limit, &polished);
         iterations += polished.iterations;
+        newton_work += polished.iterations as f64 * rank_1_step;
         if polished.cost < best.cost {
             best = polished;
         }
         let reach_p = reach(&certifier, &best);
         crate::progress::phase("certificate");
         if let Some(bound) = certifier.certify(problem, &best.point, &best.lambda, reach_p) {
-            return finish(
+            let mut solution = finish(
                 best,
                 Some(bound),
                 None,
@@ -615,6 +659,8 @@ pub fn solve_from(
                 &mut certifier,
                 options,
             );
+            solution.staircase_work = work(newton_work, &certifier);
+            return solution;
         }
     }
     // No certificate: the relaxation's bound at the last rank (converged tightly for it), or the
@@ -625,10 +671,12 @@ pub fn solve_from(
     if rank > 1 {
         let tight = StaircaseOptions {
             tolerance: 0.0,
-            ..budget(iterations)
+            ..budget(work(newton_work, &certifier), rank)
         };
         let relaxed = optimize_to(problem, None, local.point.clone(), &tight, observer, 1e-12);
+        limit_reached |= cut(&tight, &relaxed);
         iterations += relaxed.iterations;
+        newton_work += relaxed.iterations as f64 * rank_1_step * step_work(rank);
         let eta_all = relaxed.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
         bound = certifier.certify(problem, &relaxed.point, &relaxed.lambda, eta_all);
         relaxed_lambda = Some(relaxed.lambda);
@@ -643,7 +691,6 @@ pub fn solve_from(
     // at rank p, it is the closest to λ* (the estimate's own λ may be strictly feasible, its
     // eigenvalues lifted off zero by its distance from λ*).
     let own_lambda = best.lambda.clone();
-    limit_reached |= iterations - start_iterations >= options.max_staircase_iterations;
     let mut solution = finish(
         best,
         bound,
@@ -654,6 +701,7 @@ pub fn solve_from(
         options,
     );
     solution.limit_reached = limit_reached;
+    solution.staircase_work = work(newton_work, &certifier);
     solution
 }
 
@@ -685,6 +733,7 @@ fn finish(
         gradient_norm: local.gradient_norm,
         factorizations: certifier.factorizations,
         near_zero,
+        staircase_work: 0.0,
         limit_reached: false,
     }
 }
