@@ -194,7 +194,6 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         refine: args.refine,
         max_rank: args.max_rank as usize,
         staircase_budget: args.staircase_budget * 1e9,
-        ..Default::default()
     };
     let t1 = Instant::now();
     let solution = progress.watch(|| rec.observe(|| solve(&graph, &options)))?;
