@@ -50,6 +50,7 @@ pub mod certify;
 pub mod cli;
 pub mod dual;
 pub mod error;
+pub mod eval;
 pub mod linalg;
 pub mod problem;
 pub mod progress;

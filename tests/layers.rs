@@ -13,7 +13,7 @@ const FLOORS: &[&[&str]] = &[
     &["io"],
     &["stats"],
     &["linalg"],
-    &["problem", "simulate"],
+    &["problem", "simulate", "eval"],
     &["certify"],
     &["staircase", "dual", "refine"],
     &["spectrum"],

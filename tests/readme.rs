@@ -22,12 +22,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const TOOLS: [&str; 5] = [
+const TOOLS: [&str; 6] = [
     "pgo-convert",
     "pgo-solve",
     "pgo-certify",
     "pgo-spectrum",
     "pgo-simulate",
+    "pgo-eval",
 ];
 
 const TIMEOUT: Duration = Duration::from_secs(300);
@@ -499,23 +500,22 @@ fn documented_fields(readme: &str, tool: &str) -> std::collections::BTreeSet<Str
         .collect()
 }
 
-/// Every key of the JSON objects printed (top level, `components[]`, `timings`).
+/// Every key of the JSON objects printed, at any depth.
 fn printed_fields(json: &[u8], into: &mut std::collections::BTreeSet<String>) {
+    fn keys(value: &serde_json::Value, into: &mut std::collections::BTreeSet<String>) {
+        match value {
+            serde_json::Value::Object(object) => {
+                for (key, v) in object {
+                    into.insert(key.clone());
+                    keys(v, into);
+                }
+            }
+            serde_json::Value::Array(items) => items.iter().for_each(|v| keys(v, into)),
+            _ => {}
+        }
+    }
     for line in String::from_utf8_lossy(json).lines() {
-        let value: serde_json::Value = serde_json::from_str(line).unwrap();
-        let object = value.as_object().unwrap();
-        into.extend(object.keys().cloned());
-        for component in object
-            .get("components")
-            .and_then(|c| c.as_array())
-            .into_iter()
-            .flatten()
-        {
-            into.extend(component.as_object().unwrap().keys().cloned());
-        }
-        if let Some(t) = object.get("timings").and_then(|t| t.as_object()) {
-            into.extend(t.keys().cloned());
-        }
+        keys(&serde_json::from_str(line).unwrap(), into);
     }
 }
 
@@ -536,7 +536,7 @@ fn json_reports_are_documented() {
     let warning = with_warning.to_str().unwrap();
     let solved_path = solved.to_str().unwrap();
     // (tool, input, flags): each chosen to bring out optional fields.
-    let runs: [(&str, &[(&str, &str)]); 4] = [
+    let runs: [(&str, &[(&str, &str)]); 5] = [
         (
             "pgo-solve",
             &[
@@ -560,6 +560,10 @@ fn json_reports_are_documented() {
             &[(mit, "-k 3"), (warning, "-k 3"), (toy, "--weights unit")],
         ),
         ("pgo-convert", &[(mit, "--stats"), (warning, "--stats")]),
+        (
+            "pgo-eval",
+            &[(mit, "SOLVED"), (mit, "SOLVED --no-align --delta 900")],
+        ),
     ];
     let out = Command::new(bin_dir().join("pgo-solve"))
         .current_dir(root())

@@ -7,6 +7,7 @@
 pub mod certify;
 pub mod common;
 pub mod convert;
+pub mod eval;
 pub mod progress_bar;
 pub mod signals;
 pub mod simulate;
@@ -24,6 +25,7 @@ pub fn commands() -> Vec<clap::Command> {
         spectrum::Args::command(),
         certify::Args::command(),
         simulate::Args::command(),
+        eval::Args::command(),
     ]
 }
 

@@ -130,6 +130,8 @@ pub struct Tool {
     pub inputs: usize,
     /// Whether it has `-o/--output`.
     pub writes: bool,
+    /// Whether it has `--weights` (it evaluates the objective).
+    pub weighs: bool,
 }
 
 /// Every tool of `pgo::cli::commands()` that reads a graph file (a required positional
@@ -141,6 +143,7 @@ pub fn input_tools() -> Vec<Tool> {
             name: c.get_name().to_string(),
             inputs: c.get_positionals().filter(|a| a.is_required_set()).count(),
             writes: c.get_arguments().any(|a| a.get_long() == Some("output")),
+            weighs: c.get_arguments().any(|a| a.get_long() == Some("weights")),
         })
         .filter(|t| t.inputs > 0)
         .collect();

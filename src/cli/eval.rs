@@ -1,0 +1,206 @@
+//! `pgo-eval`: the trajectory error of an estimate against a reference (evo's APE and RPE).
+
+use super::common::{num, to_json_line, write_stdout};
+use crate::error::Error;
+use crate::eval::align::Alignment;
+use crate::eval::ape::{AbsoluteError, absolute_error};
+use crate::eval::rpe::{RelativeError, relative_error};
+use crate::eval::{Statistics, match_by_id};
+use crate::graph::PoseGraph;
+use crate::io::{self, Dialect, Format, ReadOptions};
+use clap::Parser;
+use serde::Serialize;
+use std::process::ExitCode;
+
+const EXAMPLES: &str = "\
+Examples:
+  pgo-solve ring.g2o -o ring-opt.g2o && pgo-eval ring-opt.g2o ring_groundtruth.g2o
+  pgo-eval intel-opt.g2o intel-gtsam.g2o --delta 10 --json | jq .ape.translation.rmse
+  pgo-eval est.g2o gt.g2o --no-align          positions compared as they are";
+
+/// Error of an estimate against a reference: ground truth, or another solver's estimate.
+///
+/// Poses are matched by vertex id (ids in only one file are left out and counted). The estimate
+/// is aligned to the reference by the SE(2) transform that minimizes the squared position error
+/// (Umeyama's alignment without scale, as evo's --align), then:
+/// APE, the absolute pose error per matched pose: the distance between the positions (m) and the
+/// heading difference (degrees);
+/// RPE, the relative pose error over pairs of matched poses --delta apart in ascending id order:
+/// the error of the estimate's relative motion against the reference's, (Q_i^-1 Q_j)^-1 (P_i^-1
+/// P_j), its translation norm and rotation angle (alignment does not change it). Pairs (0, d),
+/// (d, 2d), ... as evo's default, or every (i, i + d) with --all-pairs.
+/// Each is summarized as evo does: rmse, mean, median, std (population), min, max.
+#[derive(Debug, Parser)]
+#[command(name = "pgo-eval", version, after_help = super::after_help(EXAMPLES))]
+pub struct Args {
+    /// The estimate: a g2o or TORO file whose vertex lines hold the poses
+    #[arg(value_name = "EST")]
+    pub estimate: String,
+
+    /// The reference (ground truth): a g2o or TORO file whose vertex lines hold the poses
+    #[arg(value_name = "REF")]
+    pub reference: String,
+
+    /// Format of both files [default: from the extension (.g2o, .graph), else from the tags]
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub from: Option<Format>,
+
+    /// How to read the six noise values of each edge (only checked here) [default: g2o for
+    /// EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]
+    #[arg(long, value_enum, value_name = "DIALECT")]
+    pub dialect: Option<Dialect>,
+
+    /// Treat unknown tags as errors instead of skipping them with a warning
+    #[arg(long)]
+    pub strict: bool,
+
+    /// Skip TORO's EQUIV lines (vertex merges, not implemented) with a warning instead of
+    /// refusing the file
+    #[arg(long, conflicts_with = "strict")]
+    pub ignore_equiv: bool,
+
+    /// Accept noise matrices that are not positive definite
+    #[arg(long)]
+    pub allow_indefinite: bool,
+
+    /// RPE: the step between the poses of a pair, in matched poses
+    #[arg(long, default_value = "1", value_name = "D", value_parser = clap::value_parser!(u32).range(1..))]
+    pub delta: u32,
+
+    /// RPE: every pair (i, i + D), not only (0, D), (D, 2D), ...
+    #[arg(long)]
+    pub all_pairs: bool,
+
+    /// Compare the positions as they are, without the SE(2) alignment
+    #[arg(long)]
+    pub no_align: bool,
+
+    /// Print the report as one JSON object on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `--json` prints.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    pub estimate_poses: usize,
+    pub reference_poses: usize,
+    /// Poses with an id in both files.
+    pub matched: usize,
+    /// The SE(2) transform applied to the estimate (absent with --no-align).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alignment: Option<Alignment>,
+    pub ape: AbsoluteError,
+    /// Absent when fewer than D + 1 poses are matched.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rpe: Option<RelativeError>,
+}
+
+/// Entry point of the `pgo-eval` binary.
+pub fn main() -> ExitCode {
+    let args = Args::parse();
+    crate::cli::run_tool("pgo-eval", || run(&args))
+}
+
+/// Reads a file of poses; a file without vertex lines has none to compare. Its warnings are
+/// printed unless `quiet` (the same file read a second time).
+fn read_poses(args: &Args, path: &str, quiet: bool) -> crate::Result<PoseGraph> {
+    let options = ReadOptions {
+        format: args.from,
+        dialect: args.dialect,
+        strict: args.strict,
+        ignore_equiv: args.ignore_equiv,
+        allow_indefinite: args.allow_indefinite,
+    };
+    let (graph, report) = io::read_path(path, &options)?;
+    if !quiet {
+        crate::cli::print_warnings(&report.warnings);
+    }
+    if !graph.vertices_declared {
+        return Err(Error::Invalid(format!(
+            "{path}: the file has no vertex lines, so it holds no poses to compare"
+        )));
+    }
+    Ok(graph)
+}
+
+pub fn run(args: &Args) -> crate::Result<ExitCode> {
+    let estimate = read_poses(args, &args.estimate, false)?;
+    let reference = read_poses(args, &args.reference, args.reference == args.estimate)?;
+    let matched = match_by_id(&estimate, &reference);
+    if matched.ids.is_empty() {
+        return Err(Error::Invalid(format!(
+            "{} and {} have no vertex id in common",
+            args.estimate, args.reference
+        )));
+    }
+    let alignment = if args.no_align {
+        None
+    } else {
+        // Some: at least one pose is matched.
+        Alignment::least_squares(&matched)
+    };
+    let ape = absolute_error(&matched, &alignment.unwrap_or(Alignment::IDENTITY))
+        .expect("at least one matched pose");
+    let report = Report {
+        estimate_poses: estimate.num_poses(),
+        reference_poses: reference.num_poses(),
+        matched: matched.ids.len(),
+        alignment,
+        ape,
+        rpe: relative_error(&matched, args.delta as usize, args.all_pairs),
+    };
+    if args.json {
+        write_stdout(to_json_line(&report)?.as_bytes())?;
+    } else {
+        eprint!("{}", text_report(args, &report));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn row(name: &str, s: &Statistics) -> String {
+    format!(
+        "  {name:<22} rmse {}  mean {}  median {}  std {}  min {}  max {}\n",
+        num(s.rmse),
+        num(s.mean),
+        num(s.median),
+        num(s.std),
+        num(s.min),
+        num(s.max)
+    )
+}
+
+fn text_report(args: &Args, r: &Report) -> String {
+    let mut out = format!(
+        "pgo-eval: {} against {}: {} poses matched by id (of {} and {})\n",
+        args.estimate, args.reference, r.matched, r.estimate_poses, r.reference_poses
+    );
+    match &r.alignment {
+        Some(a) => out.push_str(&format!(
+            "  aligned by SE(2): rotation {} rad, translation ({}, {})\n",
+            num(a.angle),
+            num(a.x),
+            num(a.y)
+        )),
+        None => out.push_str("  not aligned (--no-align)\n"),
+    }
+    out.push_str(&row("APE translation (m)", &r.ape.translation));
+    out.push_str(&row("APE rotation (deg)", &r.ape.rotation_deg));
+    match &r.rpe {
+        Some(rpe) => {
+            out.push_str(&format!(
+                "  RPE over pairs {} apart{}, {} pairs\n",
+                rpe.delta,
+                if rpe.all_pairs { " (all pairs)" } else { "" },
+                rpe.translation.count
+            ));
+            out.push_str(&row("RPE translation (m)", &rpe.translation));
+            out.push_str(&row("RPE rotation (deg)", &rpe.rotation_deg));
+        }
+        None => out.push_str(&format!(
+            "  RPE: no pair of matched poses {} apart\n",
+            args.delta
+        )),
+    }
+    out
+}
