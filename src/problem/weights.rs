@@ -99,6 +99,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: true,
             noise: kind,
+            landmarks: Default::default(),
         }
     }
 

@@ -718,6 +718,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Default::default(),
         };
         // x_i = (1, 2, π/2), x_j = (1, 5, π): x_i⁻¹ x_j = (R(−π/2)(0, 3), π/2) = (3, 0, π/2).
         // z = (2, 1, π/4): e = (R(−π/4)(1, −1), π/4) = (0, −√2, π/4), so with Ω = OMEGA

@@ -305,6 +305,7 @@ mod tests {
             fixed: Vec::new(),
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Default::default(),
         }
     }
 
