@@ -183,6 +183,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let solve_s = t1.elapsed().as_secs_f64();
     graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
+    graph
+        .landmarks
+        .positions
+        .clone_from(&solution.landmark_estimate);
+    graph.landmarks.declared = true;
     rec.optimized(&graph, options.weights);
 
     let t2 = Instant::now();

@@ -17,11 +17,6 @@ pub fn check_not_empty(graph: &PoseGraph) -> Result<(), Error> {
             "the graph has no poses and no edges: nothing to solve".into(),
         ));
     }
-    if !graph.landmarks.is_empty() {
-        return Err(Error::Invalid(
-            "the graph has landmarks, which the solvers do not take yet".into(),
-        ));
-    }
     Ok(())
 }
 

@@ -156,14 +156,34 @@ pub fn edge_error(xi: Pose2, xj: Pose2, z: Pose2) -> [f64; 3] {
 ///
 /// If an edge refers to a pose outside `poses`.
 pub fn chi2(graph: &PoseGraph, poses: &[Pose2]) -> f64 {
-    graph
+    let edges: f64 = graph
         .edges
         .iter()
         .map(|e| match graph.information(e) {
             Some(info) => Factor::new(e.i, e.j, e.measurement, info).chi2(poses),
             None => f64::NAN,
         })
-        .sum()
+        .sum();
+    edges + landmark_chi2(graph, poses)
+}
+
+/// g2o's chi2 of the landmark observations (`EdgeSE2PointXY`): e = R(θ_i)ᵀ (l_k − p_i) − d,
+/// Σ eᵀ Ω_ik e, with the landmark positions after the n poses in `poses` (0 without landmarks).
+pub fn landmark_chi2(graph: &PoseGraph, poses: &[Pose2]) -> f64 {
+    let n = graph.num_poses();
+    graph
+        .landmarks
+        .observations
+        .iter()
+        .map(|o| {
+            let (x, l) = (poses[o.pose], poses[n + o.landmark]);
+            let (s, c) = x.theta.sin_cos();
+            let (dx, dy) = (l.x - x.x, l.y - x.y);
+            let e = [c * dx + s * dy - o.d[0], -s * dx + c * dy - o.d[1]];
+            let [a, b, d] = o.information.0;
+            a * e[0] * e[0] + 2.0 * b * e[0] * e[1] + d * e[1] * e[1]
+        })
+        .fold(0.0, |a, b| a + b)
 }
 
 /// Levenberg-Marquardt from `initial` on g2o's chi2 (module docs: retraction, damping, gauge).
