@@ -296,12 +296,20 @@ fn write_graph(
 fn text_report(input: &str, report: &Report) -> String {
     let r = report.solution;
     let mut out = format!(
-        "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {}\n",
+        "pgo-solve: {}: {} pose{}, {} edge{}{}, {} component{}; weights {}; method {}\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
         if r.poses == 1 { "" } else { "s" },
         r.edges,
         if r.edges == 1 { "" } else { "s" },
+        if r.landmarks == 0 {
+            String::new()
+        } else {
+            format!(
+                ", {} landmarks, {} observations",
+                r.landmarks, r.observations
+            )
+        },
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),

@@ -215,11 +215,6 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         check_dense_size(graph, "--method sdp")?;
     }
     check_fixed(graph)?;
-    if options.refine && !graph.landmarks.is_empty() {
-        return Err(Error::Invalid(
-            "--refine does not take landmark graphs yet: solve without it (the certified estimate is the optimum of f)".into(),
-        ));
-    }
     let mut components = Vec::new();
     let mut estimate = graph.poses.clone();
     let mut landmark_estimate = graph.landmarks.positions.clone();
