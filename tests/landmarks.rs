@@ -758,3 +758,97 @@ fn solve_refine_takes_landmark_graphs() {
     assert!(refined <= certified, "{refined} > {certified}");
     assert!((s.refined_chi2.unwrap() - refined).abs() <= 1e-9 * refined);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Simulation (issue 13, item 4).
+
+use pgo::simulate::{LandmarkConfig, SimulationConfig, TranslationNoise, add_landmarks, simulate};
+
+/// Simulated landmark worlds: the poses and edges are those of the same configuration without
+/// landmarks (a stream of their own); every pose observes exactly the kept landmarks within the
+/// range (brute force over all pairs); without noise the measurements are exact (f = 0 at the
+/// truth, by the definition); the same seed gives the same file, another seed another.
+#[test]
+fn simulated_landmark_worlds() {
+    let config = SimulationConfig {
+        n: 40,
+        loop_probability: 0.0,
+        seed: 11,
+        ..Default::default()
+    };
+    let landmarks = LandmarkConfig {
+        count: 25,
+        range: 2.5,
+    };
+    let plain = simulate(&config);
+    let mut sim = simulate(&config);
+    add_landmarks(&mut sim, &config, &landmarks);
+    assert_eq!(sim.graph.poses, plain.graph.poses);
+    assert_eq!(sim.graph.edges, plain.graph.edges);
+    let marks = &sim.graph.landmarks;
+    assert!(!marks.is_empty() && marks.len() <= 25);
+    assert_eq!(marks.ids[0], 40);
+    let mut expected = Vec::new();
+    for (i, p) in sim.truth.iter().enumerate() {
+        for (k, l) in marks.positions.iter().enumerate() {
+            if (l[0] - p.x).hypot(l[1] - p.y) <= 2.5 {
+                expected.push((i, k));
+            }
+        }
+    }
+    let mut got: Vec<(usize, usize)> = marks
+        .observations
+        .iter()
+        .map(|o| (o.pose, o.landmark))
+        .collect();
+    got.sort_unstable();
+    assert_eq!(got, expected);
+    // Noise-free: f = 0 at the truth.
+    let exact = SimulationConfig {
+        translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
+        rotation_noise: pgo::simulate::RotationNoise::Gaussian { sigma: 0.0 },
+        ..config
+    };
+    let mut sim0 = simulate(&exact);
+    add_landmarks(&mut sim0, &exact, &landmarks);
+    let x: Vec<Pose2> = sim0
+        .truth
+        .iter()
+        .copied()
+        .chain(
+            sim0.graph
+                .landmarks
+                .positions
+                .iter()
+                .map(|&[x, y]| Pose2::new(x, y, 0.0)),
+        )
+        .collect();
+    assert!(f_by_hand(&sim0.graph, &x) < 1e-24);
+    // The tool: reproducible, and what it writes reads back as a g2o landmark graph.
+    let args = [
+        "-n",
+        "40",
+        "--loop-probability",
+        "0",
+        "--landmarks",
+        "25",
+        "--landmark-range",
+        "2.5",
+        "--seed",
+        "11",
+        "-q",
+    ];
+    let a = run_with_stdin("pgo-simulate", &args, None);
+    let b = run_with_stdin("pgo-simulate", &args, None);
+    assert_eq!(a.status.code(), Some(0));
+    assert_eq!(a.stdout, b.stdout);
+    let mut other = args;
+    other[9] = "12";
+    assert_ne!(
+        run_with_stdin("pgo-simulate", &other, None).stdout,
+        a.stdout
+    );
+    let g = read_bytes(&a.stdout);
+    assert_eq!(g.landmarks.ids, marks.ids);
+    assert_eq!(g.landmarks.observations.len(), marks.observations.len());
+}
