@@ -53,7 +53,9 @@
 //! closures (i, j), j > i + 1.
 
 use crate::error::Error;
-use crate::graph::{Edge, MAX_VERTEX_ID, Pose2, PoseGraph, SymMat3};
+use crate::graph::{
+    Edge, LandmarkForm, Landmarks, MAX_VERTEX_ID, Observation, Pose2, PoseGraph, SymMat2, SymMat3,
+};
 pub use crate::linalg::rng::{Rng, SplitMix64};
 use std::f64::consts::{PI, TAU};
 use std::fmt;
@@ -305,6 +307,88 @@ pub fn simulate(config: &SimulationConfig) -> Simulated {
         graph: PoseGraph::with_edges(truth.clone(), edges),
         truth,
     }
+}
+
+/// Landmarks added to a simulated world ([`add_landmarks`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandmarkConfig {
+    /// Number of landmarks m, positions uniform in the square of the poses.
+    pub count: usize,
+    /// A pose observes every landmark within this distance (metres).
+    pub range: f64,
+}
+
+/// Adds `landmarks.count` landmarks to a simulated world (issue 13): positions uniform in
+/// [0, side)², and an observation d_ik = R_iᵀ (l_k − p_i) + ε_d from every pose i of every
+/// landmark k with |l_k − p_i| ≤ range, ε_d drawn as the translation noise ε_Δ of eq. (47)
+/// (the configuration's), information the identity. Landmarks that no pose sees are dropped
+/// (a file declares only what is observed); the kept ones get ids n, n+1, ... in g2o's form
+/// (`VERTEX_XY` at the true position, `EDGE_SE2_XY`), in order of their draw.
+///
+/// Reproducible: the draws come from a fourth stream of the seed (SplitMix64 outputs 13..16,
+/// after the three of [`simulate`], so the poses, edges and their noise are those of
+/// [`simulate`] with the same configuration): for k = 0..m: x_k, y_k; then for every
+/// observation, poses ascending and for each pose landmarks ascending: ε_d (two normals or two
+/// uniforms, drawn also when σ = 0).
+pub fn add_landmarks(sim: &mut Simulated, config: &SimulationConfig, landmarks: &LandmarkConfig) {
+    let mut seeder = SplitMix64::new(config.seed);
+    for _ in 0..3 {
+        Rng::from_splitmix(&mut seeder);
+    }
+    let mut rng = Rng::from_splitmix(&mut seeder);
+    let points: Vec<[f64; 2]> = (0..landmarks.count)
+        .map(|_| {
+            let x = config.side * rng.uniform();
+            let y = config.side * rng.uniform();
+            [x, y]
+        })
+        .collect();
+    let mut seen = Vec::new();
+    for (i, a) in sim.truth.iter().enumerate() {
+        let (c, s) = (a.theta.cos(), a.theta.sin());
+        for (k, l) in points.iter().enumerate() {
+            let (dx, dy) = (l[0] - a.x, l[1] - a.y);
+            if dx.hypot(dy) > landmarks.range {
+                continue;
+            }
+            let (ex, ey) = match config.translation_noise {
+                TranslationNoise::Gaussian { sigma } => {
+                    let (zx, zy) = (rng.normal(), rng.normal());
+                    (sigma * zx, sigma * zy)
+                }
+                TranslationNoise::Uniform { half_width: h } => (
+                    h * (2.0 * rng.uniform() - 1.0),
+                    h * (2.0 * rng.uniform() - 1.0),
+                ),
+            };
+            seen.push((i, k, [c * dx + s * dy + ex, -s * dx + c * dy + ey]));
+        }
+    }
+    let mut index = vec![usize::MAX; points.len()];
+    let mut kept = Vec::new();
+    let mut by_draw: Vec<usize> = seen.iter().map(|o| o.1).collect();
+    by_draw.sort_unstable();
+    by_draw.dedup();
+    for k in by_draw {
+        index[k] = kept.len();
+        kept.push(k);
+    }
+    let n = sim.truth.len();
+    sim.graph.landmarks = Landmarks {
+        ids: (0..kept.len()).map(|k| (n + k) as u32).collect(),
+        positions: kept.iter().map(|&k| points[k]).collect(),
+        observations: seen
+            .into_iter()
+            .map(|(pose, k, d)| Observation {
+                pose,
+                landmark: index[k],
+                d,
+                information: SymMat2::IDENTITY,
+            })
+            .collect(),
+        declared: true,
+        form: LandmarkForm::G2o,
+    };
 }
 
 /// The angle `a` wrapped to (−π, π] (for finite `a`): `a mod 2π` by the exact IEEE remainder,

@@ -531,6 +531,18 @@ fn json_reports_are_documented() {
     let mut text = std::fs::read_to_string(root().join("datasets/MIT.g2o")).unwrap();
     text.push_str("UNKNOWN_TAG 1 2 3\n");
     std::fs::write(&with_warning, text).unwrap();
+    // A pose-landmark graph: a triangle of poses, each observing one landmark.
+    let landmarks = dir.path().join("landmarks.g2o");
+    std::fs::write(
+        &landmarks,
+        "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 1.5707963267948966\nVERTEX_SE2 2 1 1 3.141592653589793\n\
+         VERTEX_XY 7 0.5 0.5\n\
+         EDGE_SE2 0 1 1 0 1.5707963267948966 1 0 0 1 0 1\n\
+         EDGE_SE2 1 2 1 0 1.5707963267948966 1 0 0 1 0 1\n\
+         EDGE_SE2_XY 0 7 0.5 0.5 1 0 1\nEDGE_SE2_XY 1 7 0.5 0.5 1 0 1\nEDGE_SE2_XY 2 7 0.5 0.5 1 0 1\n",
+    )
+    .unwrap();
+    let landmarks = landmarks.to_str().unwrap();
     let solved = dir.path().join("solved.g2o");
     let (mit, toy) = ("datasets/MIT.g2o", "datasets/paper_toy.g2o");
     let warning = with_warning.to_str().unwrap();
@@ -544,6 +556,7 @@ fn json_reports_are_documented() {
                 (mit, "--method staircase --refine"),
                 (warning, "--no-timings"),
                 (toy, "--weights unit"),
+                (landmarks, ""),
             ],
         ),
         (
@@ -553,13 +566,21 @@ fn json_reports_are_documented() {
                 (mit, "--estimate SOLVED"),
                 (warning, ""),
                 (toy, "--weights unit"),
+                (landmarks, ""),
             ],
         ),
         (
             "pgo-spectrum",
             &[(mit, "-k 3"), (warning, "-k 3"), (toy, "--weights unit")],
         ),
-        ("pgo-convert", &[(mit, "--stats"), (warning, "--stats")]),
+        (
+            "pgo-convert",
+            &[
+                (mit, "--stats"),
+                (warning, "--stats"),
+                (landmarks, "--stats"),
+            ],
+        ),
         (
             "pgo-eval",
             &[(mit, "SOLVED"), (mit, "SOLVED --no-align --delta 900")],

@@ -23,7 +23,7 @@ _pgo__convert() {
 
     case "${cmd}" in
         pgo__convert)
-            opts="-o -q -h -V --output --from --to --dialect --to-dialect --reindex --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-o -q -h -V --output --from --to --dialect --to-dialect --reindex --landmarks --landmark-offset --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -51,6 +51,14 @@ _pgo__convert() {
                     ;;
                 --to-dialect)
                     COMPREPLY=($(compgen -W "g2o toro-info toro-cov g2o-cov" -- "${cur}"))
+                    return 0
+                    ;;
+                --landmarks)
+                    COMPREPLY=($(compgen -W "g2o landmark2" -- "${cur}"))
+                    return 0
+                    ;;
+                --landmark-offset)
+                    COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;
                 --rerun-save)

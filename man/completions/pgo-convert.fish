@@ -11,9 +11,12 @@ complete -c pgo-convert -l to-dialect -d 'How to write the noise values [default
 toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
 toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'
 g2o-cov\t'Covariance, g2o order'"
+complete -c pgo-convert -l landmarks -d 'Write landmarks in this form: g2o (VERTEX_XY, EDGE_SE2_XY; one id space with the poses) or landmark2 (CPL-SLAM\'s LANDMARK2, landmark ids of their own; positions on POINT2 lines) [default: the input\'s]. To g2o, landmark id k becomes k + OFFSET: --landmark-offset, else 0 when no landmark id is a pose id, else the largest pose id + 1 (printed on stderr); to landmark2, k becomes k - OFFSET (default 0), so the same offset converts back' -r -f -a "g2o\t'g2o\'s types: `VERTEX_XY id x y`, `EDGE_SE2_XY pose point dx dy I11 I12 I22`; landmark ids share one id space with the poses'
+landmark2\t'CPL-SLAM\'s `LANDMARK2 pose landmark dx dy I11 I12 I22` (positions, if any, on `POINT2 id x y` lines, which CPL-SLAM skips); landmark ids live in their own id space'"
+complete -c pgo-convert -l landmark-offset -d 'With --landmarks: the offset between the two id spaces (see --landmarks)' -r
 complete -c pgo-convert -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-convert -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
-complete -c pgo-convert -l reindex -d 'Renumber vertices 0..n-1 in ascending order of their ids'
+complete -c pgo-convert -l reindex -d 'Renumber vertices 0..n-1 in ascending order of their ids (landmarks follow as n..n+m in g2o\'s form, 0..m-1 in the LANDMARK2 form)'
 complete -c pgo-convert -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
 complete -c pgo-convert -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph written is the file\'s without them (--stats always skips them with a warning)'
 complete -c pgo-convert -l allow-indefinite -d 'Accept noise matrices that are not positive definite'

@@ -23,7 +23,7 @@ _pgo__simulate() {
 
     case "${cmd}" in
         pgo__simulate)
-            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --landmarks --landmark-range --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -58,6 +58,14 @@ _pgo__simulate() {
                     return 0
                     ;;
                 --side)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --landmarks)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --landmark-range)
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;

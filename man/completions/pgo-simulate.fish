@@ -6,6 +6,8 @@ complete -c pgo-simulate -l rotation-noise -d 'Rotation noise e_R: gaussian:SIGM
 complete -c pgo-simulate -l translation-noise -d 'Translation noise e_Delta: gaussian:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform:HALFWIDTH (uniform in [-HALFWIDTH, HALFWIDTH]^2)' -r
 complete -c pgo-simulate -l seed -d 'Seed of the random number generator (any 64-bit unsigned integer)' -r
 complete -c pgo-simulate -l side -d 'Side L of the square the positions are drawn from, in metres' -r
+complete -c pgo-simulate -l landmarks -d 'Landmarks M: positions uniform in the square, observed (d = R_i^T (l - p_i) + e, e the translation noise) from every pose within --landmark-range; written as VERTEX_XY (ids N, N+1, ..., the landmarks some pose sees) and EDGE_SE2_XY lines' -r
+complete -c pgo-simulate -l landmark-range -d 'A pose observes the landmarks within this distance, in metres' -r
 complete -c pgo-simulate -s o -l output -d 'Output file, or - for stdout' -r
 complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s extension (.g2o, .graph), else g2o]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"

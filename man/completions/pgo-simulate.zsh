@@ -24,6 +24,8 @@ per-pose\:"Each pose j >= 2 with probability P_c closes one loop to an earlier p
 '--translation-noise=[Translation noise e_Delta\: gaussian\:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform\:HALFWIDTH (uniform in \[-HALFWIDTH, HALFWIDTH\]^2)]:SPEC:_default' \
 '--seed=[Seed of the random number generator (any 64-bit unsigned integer)]:S:_default' \
 '--side=[Side L of the square the positions are drawn from, in metres]:L:_default' \
+'--landmarks=[Landmarks M\: positions uniform in the square, observed (d = R_i^T (l - p_i) + e, e the translation noise) from every pose within --landmark-range; written as VERTEX_XY (ids N, N+1, ..., the landmarks some pose sees) and EDGE_SE2_XY lines]:M:_default' \
+'--landmark-range=[A pose observes the landmarks within this distance, in metres]:R:_default' \
 '-o+[Output file, or - for stdout]:OUT:_default' \
 '--output=[Output file, or - for stdout]:OUT:_default' \
 '--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"

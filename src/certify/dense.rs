@@ -57,7 +57,7 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
     let penalized = matrix.penalized_dense(lambda);
     let (eigenvalues, eigenvectors) = hermitian_eigen(&penalized);
     let beta = (eigen_error(&penalized) - eigenvalues[0]).max(0.0);
-    let schur_shift = if beta == 0.0 || n == 1 {
+    let schur_shift = if beta == 0.0 || matrix.positions() == 0 {
         beta
     } else {
         let (l, s, _) = matrix.blocks();
@@ -99,7 +99,9 @@ pub fn dual_bound(matrix: &PoseGraphMatrix, lambda: &[f64]) -> Option<DualBound>
         };
         // The smallest diagonal scale of the rotation block converts an allowance on the
         // equilibrated matrix into a shift of λ.
-        let r_min = scale[n - 1..].iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let r_min = scale[matrix.positions()..]
+            .iter()
+            .fold(f64::INFINITY, |m, &v| m.min(v));
         let base = eigen_error(&equilibrated(0.0)) / (r_min * r_min);
         if proves(0.0) {
             shift = 0.0;

@@ -565,15 +565,18 @@ impl Gap {
 /// so |ΔW̃| ≤ γ_{2·deg+8} Σ_e |W̃_e| entrywise, and the ∞-norm of D(Σ_e |W̃_e|)D is summed edge by
 /// edge (doubled for the rounding of those sums).
 fn assembly_error(problem: &Problem, scale: &[f64]) -> f64 {
-    let mut degree = vec![0usize; problem.n];
+    // Nodes: poses 0..n, then landmarks n..n+m.
+    let mut degree = vec![0usize; problem.n + problem.m];
     let mut rows = vec![0.0; scale.len()];
     for t in &problem.terms {
         degree[t.i] += 1;
-        degree[t.j] += 1;
-        let (yi, yj) = (problem.rotation_row(t.i), problem.rotation_row(t.j));
-        let (dyi, dyj) = (scale[yi], scale[yj]);
+        degree[if t.landmark { problem.n + t.j } else { t.j }] += 1;
+        let yi = problem.rotation_row(t.i);
+        // An observation has no head rotation: its κ = 0, so the terms with dyj vanish.
+        let yj = problem.head_rotation_row(t);
+        let (dyi, dyj) = (scale[yi], yj.map_or(0.0, |r| scale[r]));
         let pi = problem.position_row(t.i).map(|r| (r, scale[r]));
-        let pj = problem.position_row(t.j).map(|r| (r, scale[r]));
+        let pj = problem.head_position_row(t).map(|r| (r, scale[r]));
         let (dpi, dpj) = (pi.map_or(0.0, |p| p.1), pj.map_or(0.0, |p| p.1));
         let (tau, kappa, dn) = (t.tau.abs(), t.kappa.abs(), t.delta.norm());
         if let Some((r, d)) = pi {
@@ -583,7 +586,9 @@ fn assembly_error(problem: &Problem, scale: &[f64]) -> f64 {
             rows[r] += tau * d * (d + dpi + dn * dyi);
         }
         rows[yi] += dyi * ((tau * dn * dn + kappa) * dyi + tau * dn * (dpi + dpj) + kappa * dyj);
-        rows[yj] += kappa * dyj * (dyj + dyi);
+        if let Some(yj) = yj {
+            rows[yj] += kappa * dyj * (dyj + dyi);
+        }
     }
     let deg = degree.iter().copied().max().unwrap_or(0);
     let norm = rows.iter().fold(0.0f64, |m, &r| m.max(r));

@@ -90,13 +90,26 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let (graph, read_report) = args.input.read_shown(&progress)?;
     let poses = match &args.estimate {
         None => {
-            if !graph.vertices_declared {
+            if !graph.vertices_declared
+                || (!graph.landmarks.is_empty() && !graph.landmarks.declared)
+            {
                 return Err(Error::Invalid(format!(
-                    "{}: the file has no vertex lines, so there is no estimate to certify (give one with --estimate)",
-                    args.input.input
+                    "{}: the file has no vertex lines{}, so there is no estimate to certify (give one with --estimate)",
+                    args.input.input,
+                    if graph.vertices_declared {
+                        " for its landmarks"
+                    } else {
+                        ""
+                    }
                 )));
             }
-            graph.poses.clone()
+            let landmarks = graph.landmarks.positions.iter();
+            graph
+                .poses
+                .iter()
+                .copied()
+                .chain(landmarks.map(|&[x, y]| Pose2::new(x, y, 0.0)))
+                .collect()
         }
         Some(path) => {
             progress.phase(&format!("reading {path}"));
@@ -112,7 +125,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     progress.finish();
     // The estimate as the graph to view, and the certificate as a text entry.
     let mut estimate = graph.clone();
-    estimate.poses = poses;
+    let n = graph.num_poses();
+    for (at, p) in estimate.landmarks.positions.iter_mut().zip(&poses[n..]) {
+        *at = [p.x, p.y];
+    }
+    estimate.poses = poses[..n].to_vec();
     rec.graph(&estimate);
     if args.json {
         let json = JsonReport {
@@ -145,7 +162,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     })
 }
 
-/// The poses of `path`'s vertex lines, matched to the graph's poses by id.
+/// The poses of `path`'s vertex lines, matched to the graph's poses by id, then its landmark
+/// positions matched to the graph's landmarks by id (in the same landmark form).
 fn estimate_poses(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result<Vec<Pose2>> {
     // Only the vertex lines of the estimate are used: EQUIV lines there are skipped (warning).
     let options = ReadOptions {
@@ -159,20 +177,44 @@ fn estimate_poses(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result<
             "{path}: the estimate has no vertex lines"
         )));
     }
-    graph
-        .ids
-        .iter()
-        .map(|&id| {
-            estimate
-                .index_of(id)
-                .map(|k| estimate.poses[k])
-                .ok_or_else(|| {
-                    Error::Invalid(format!(
-                        "{path}: the estimate has no vertex {id}, which the graph has"
-                    ))
-                })
-        })
-        .collect()
+    let marks = &graph.landmarks;
+    if !marks.is_empty() {
+        if estimate.landmarks.form != marks.form && !estimate.landmarks.is_empty() {
+            return Err(Error::Invalid(format!(
+                "{path}: the estimate writes its landmarks in another form than the graph (convert it with pgo-convert --landmarks)"
+            )));
+        }
+        if !estimate.landmarks.declared {
+            return Err(Error::Invalid(format!(
+                "{path}: the estimate has no landmark vertex lines (VERTEX_XY or POINT2)"
+            )));
+        }
+    }
+    let poses = graph.ids.iter().map(|&id| {
+        estimate
+            .index_of(id)
+            .map(|k| estimate.poses[k])
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "{path}: the estimate has no vertex {id}, which the graph has"
+                ))
+            })
+    });
+    let landmarks = marks.ids.iter().map(|&id| {
+        estimate
+            .landmarks
+            .index_of(id)
+            .map(|k| {
+                let [x, y] = estimate.landmarks.positions[k];
+                Pose2::new(x, y, 0.0)
+            })
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "{path}: the estimate has no landmark {id}, which the graph has"
+                ))
+            })
+    });
+    poses.chain(landmarks).collect()
 }
 
 fn text_report(args: &Args, r: &Report) -> String {

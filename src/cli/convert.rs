@@ -17,7 +17,9 @@ Examples:
   pgo-convert --stats CSAIL.g2o                 counts, components, id range, duplicates
   pgo-convert --stats --json city10000.g2o | jq .edges
   cat M3500.g2o | pgo-convert - --reindex --to g2o -o M3500-dense.g2o
-  pgo-convert w20000.txt --dialect g2o -o w20000.g2o   EDGE2 tags, g2o-order information";
+  pgo-convert w20000.txt --dialect g2o -o w20000.g2o   EDGE2 tags, g2o-order information
+  pgo-convert cityTrees10000.g2o --landmarks g2o -o trees.g2o   LANDMARK2 -> VERTEX_XY/EDGE_SE2_XY
+  pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back";
 
 /// Convert planar pose graphs between g2o and TORO, losslessly, or report statistics.
 ///
@@ -62,9 +64,22 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "DIALECT", conflicts_with = "stats")]
     pub to_dialect: Option<Dialect>,
 
-    /// Renumber vertices 0..n-1 in ascending order of their ids
+    /// Renumber vertices 0..n-1 in ascending order of their ids (landmarks follow as n..n+m in
+    /// g2o's form, 0..m-1 in the LANDMARK2 form)
     #[arg(long)]
     pub reindex: bool,
+
+    /// Write landmarks in this form: g2o (VERTEX_XY, EDGE_SE2_XY; one id space with the poses)
+    /// or landmark2 (CPL-SLAM's LANDMARK2, landmark ids of their own; positions on POINT2 lines)
+    /// [default: the input's]. To g2o, landmark id k becomes k + OFFSET: --landmark-offset, else
+    /// 0 when no landmark id is a pose id, else the largest pose id + 1 (printed on stderr); to
+    /// landmark2, k becomes k - OFFSET (default 0), so the same offset converts back
+    #[arg(long, value_enum, value_name = "FORM", conflicts_with = "stats")]
+    pub landmarks: Option<crate::graph::LandmarkForm>,
+
+    /// With --landmarks: the offset between the two id spaces (see --landmarks)
+    #[arg(long, value_name = "OFFSET", requires = "landmarks")]
+    pub landmark_offset: Option<u32>,
 
     /// Treat unknown tags as errors instead of skipping them with a warning
     #[arg(long)]
@@ -134,7 +149,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     rec.graph(&graph);
 
     let input_summary = format!(
-        "{}: {} poses{}, {} edges; format {} ({}), dialect {} ({})",
+        "{}: {} poses{}, {} edges{}; format {} ({}), dialect {} ({})",
         display_name(&args.input, "<stdin>"),
         graph.num_poses(),
         if graph.vertices_declared || graph.num_poses() == 0 {
@@ -143,6 +158,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             " (no vertex lines: composed along a spanning tree)"
         },
         graph.edges.len(),
+        if graph.landmarks.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", {} landmarks, {} observations",
+                graph.landmarks.len(),
+                graph.landmarks.observations.len()
+            )
+        },
         report.format,
         report.format_reason,
         report.dialect,
@@ -182,6 +206,33 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             graph.ids[graph.edges[k].i], graph.ids[graph.edges[k].j]
         ))
     })?;
+    let mut mapping = String::new();
+    match args.landmarks {
+        Some(crate::graph::LandmarkForm::G2o) => {
+            let from = graph.landmarks.form;
+            let offset = graph
+                .landmarks_to_g2o(args.landmark_offset)
+                .map_err(|e| Error::Invalid(format!("--landmarks g2o: {e}")))?;
+            if from != crate::graph::LandmarkForm::G2o && !graph.landmarks.is_empty() {
+                mapping = format!(
+                    "; landmark ids shifted by +{offset} into the poses' id space (LANDMARK2 landmark k is vertex k + {offset}; back with --landmarks landmark2 --landmark-offset {offset})"
+                );
+            }
+        }
+        Some(crate::graph::LandmarkForm::Landmark2) => {
+            let from = graph.landmarks.form;
+            graph
+                .landmarks_to_landmark2(args.landmark_offset)
+                .map_err(|e| Error::Invalid(format!("--landmarks landmark2: {e}")))?;
+            if from != crate::graph::LandmarkForm::Landmark2 && !graph.landmarks.is_empty() {
+                let offset = args.landmark_offset.unwrap_or(0);
+                mapping = format!(
+                    "; landmark ids shifted by -{offset} into their own id space (vertex k is LANDMARK2 landmark k - {offset})"
+                );
+            }
+        }
+        None => {}
+    }
     if args.reindex {
         graph.reindex();
     }
@@ -200,7 +251,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             (true, NoiseKind::Covariance) => " (information inverted to covariances)",
         };
         eprintln!(
-            "pgo-convert: {input_summary} -> {}: format {format}, dialect {dialect}{conversion}",
+            "pgo-convert: {input_summary} -> {}: format {format}, dialect {dialect}{conversion}{mapping}",
             display_name(&args.output, "<stdout>")
         );
     }
@@ -275,6 +326,23 @@ fn stats_text(name: &str, s: &GraphStats, report: &io::ReadReport) -> String {
     let mut out = String::new();
     for (k, v) in rows {
         out.push_str(&format!("{:<17}{v}\n", format!("{k}:")));
+    }
+    if let Some(form) = s.landmark_form {
+        let form = match form {
+            crate::graph::LandmarkForm::G2o => "g2o: VERTEX_XY, EDGE_SE2_XY, ids shared with poses",
+            crate::graph::LandmarkForm::Landmark2 => "LANDMARK2: landmark ids of their own",
+        };
+        for (k, v) in [
+            ("landmarks", format!("{} ({form})", s.landmarks)),
+            ("observations", s.observations.to_string()),
+            ("seen once", format!("{} landmarks", s.landmarks_seen_once)),
+            (
+                "seen by no pose",
+                format!("{} landmarks", s.landmarks_unseen),
+            ),
+        ] {
+            out.push_str(&format!("{:<17}{v}\n", format!("{k}:")));
+        }
     }
     out
 }

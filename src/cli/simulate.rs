@@ -3,7 +3,10 @@
 use super::common::RerunArgs;
 use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
-use crate::simulate::{LoopModel, RotationNoise, SimulationConfig, TranslationNoise, simulate};
+use crate::simulate::{
+    LandmarkConfig, LoopModel, RotationNoise, SimulationConfig, TranslationNoise, add_landmarks,
+    simulate,
+};
 use clap::Parser;
 use std::process::ExitCode;
 
@@ -16,6 +19,8 @@ Examples:
   pgo-simulate --rotation-noise gaussian:0 --translation-noise gaussian:0   a balanced graph
   for s in $(seq 1 100); do pgo-simulate --seed $s -o run$s.g2o; done   100 Monte Carlo runs
   pgo-simulate -n 1000000 --loop-model per-pose --loop-probability 0.05 -o big.g2o
+  pgo-simulate -n 100 --loop-probability 0 --landmarks 30 --landmark-range 3 -o slam.g2o
+                                                 a pose-landmark world: odometry + landmarks
 
 Size: the paper's model draws a loop closure for every pair of poses, about P_c n^2/2 of them:
 -n 100000 would make 5e8 edges (about 45 GB of g2o text). Graphs of more than 10^7 expected
@@ -76,6 +81,16 @@ pub struct Args {
     /// Side L of the square the positions are drawn from, in metres
     #[arg(long, value_name = "L", default_value = "10", value_parser = parse_side)]
     pub side: f64,
+
+    /// Landmarks M: positions uniform in the square, observed (d = R_i^T (l - p_i) + e, e the
+    /// translation noise) from every pose within --landmark-range; written as VERTEX_XY (ids
+    /// N, N+1, ..., the landmarks some pose sees) and EDGE_SE2_XY lines
+    #[arg(long, value_name = "M", default_value_t = 0)]
+    pub landmarks: usize,
+
+    /// A pose observes the landmarks within this distance, in metres
+    #[arg(long, value_name = "R", default_value = "3", value_parser = parse_side)]
+    pub landmark_range: f64,
 
     /// Output file, or - for stdout
     #[arg(short, long, value_name = "OUT", default_value = "-")]
@@ -155,7 +170,20 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     io::check_output(&args.output)?;
     let rec = args.rerun.recorder("pgo-simulate")?;
-    let sim = simulate(&config);
+    if args.landmarks as u128 + args.n as u128 > crate::graph::MAX_VERTEX_ID as u128 + 1 {
+        return Err(Error::Invalid(format!(
+            "{} poses and {} landmarks: ids must fit g2o's int",
+            args.n, args.landmarks
+        )));
+    }
+    let mut sim = simulate(&config);
+    if args.landmarks > 0 {
+        let landmarks = LandmarkConfig {
+            count: args.landmarks,
+            range: args.landmark_range,
+        };
+        add_landmarks(&mut sim, &config, &landmarks);
+    }
     rec.graph(&sim.graph);
     let format = args
         .to
@@ -167,12 +195,23 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         let odometry = config.n - 1;
         let loops = sim.graph.edges.len() - odometry;
         eprintln!(
-            "pgo-simulate: {} pose{}, {} edge{} ({odometry} odometry, {loops} loop closure{}); seed {}, loop probability {}{}, rotation noise {}, translation noise {}, side {} -> {}: format {format}",
+            "pgo-simulate: {} pose{}, {} edge{} ({odometry} odometry, {loops} loop closure{}){}; seed {}, loop probability {}{}, rotation noise {}, translation noise {}, side {} -> {}: format {format}",
             config.n,
             if config.n == 1 { "" } else { "s" },
             sim.graph.edges.len(),
             if sim.graph.edges.len() == 1 { "" } else { "s" },
             if loops == 1 { "" } else { "s" },
+            if args.landmarks == 0 {
+                String::new()
+            } else {
+                format!(
+                    ", {} landmarks seen of {} ({} observations within {} m)",
+                    sim.graph.landmarks.len(),
+                    args.landmarks,
+                    sim.graph.landmarks.observations.len(),
+                    args.landmark_range
+                )
+            },
             config.seed,
             config.loop_probability,
             match config.loop_model {

@@ -200,6 +200,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let solve_s = t1.elapsed().as_secs_f64();
     graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
+    graph
+        .landmarks
+        .positions
+        .clone_from(&solution.landmark_estimate);
+    graph.landmarks.declared = true;
     rec.optimized(&graph, options.weights);
 
     let t2 = Instant::now();
@@ -308,12 +313,20 @@ fn write_graph(
 fn text_report(input: &str, report: &Report) -> String {
     let r = report.solution;
     let mut out = format!(
-        "pgo-solve: {}: {} pose{}, {} edge{}, {} component{}; weights {}; method {}\n",
+        "pgo-solve: {}: {} pose{}, {} edge{}{}, {} component{}; weights {}; method {}\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
         if r.poses == 1 { "" } else { "s" },
         r.edges,
         if r.edges == 1 { "" } else { "s" },
+        if r.landmarks == 0 {
+            String::new()
+        } else {
+            format!(
+                ", {} landmarks, {} observations",
+                r.landmarks, r.observations
+            )
+        },
         r.components.len(),
         if r.components.len() == 1 { "" } else { "s" },
         r.weights.name(),

@@ -162,17 +162,22 @@ pub fn solve_connected(
     // Prop. 9: W̃(λ*) always has a zero eigenvalue; the SZEP asks that it be simple.
     let szep = zeros <= 1;
     let n = graph.num_poses();
+    let positions = matrix.positions();
     // The eigenvector of the smallest eigenvalue: the scaled solution with the SZEP (Sec. 5.1);
     // without it, the null-space method (46), or the eigenvector method (Eig, Sec. 5.2) where
     // (46) has no solution (a basis whose rotation rows lack full column rank, as with weights
     // 1 next to 1e200): an estimate all the same, which the proven bound still judges.
-    let eigenvector = || (0..n).map(|k| bound.eigenvectors[(n - 1 + k, 0)]).collect();
+    let eigenvector = || {
+        (0..n)
+            .map(|k| bound.eigenvectors[(positions + k, 0)])
+            .collect()
+    };
     let (rotations, rounding): (Vec<c64>, _) = if szep {
         (eigenvector(), Rounding::SzepEigenvector)
     } else {
         let basis = Mat::from_fn(matrix.dim(), zeros, |r, c| bound.eigenvectors[(r, c)]);
-        match crate::dual::nullspace::null_space_method(basis.as_ref(), n - 1..2 * n - 1) {
-            Ok(x) => (x[n - 1..].to_vec(), Rounding::NullSpace),
+        match crate::dual::nullspace::null_space_method(basis.as_ref(), positions..matrix.dim()) {
+            Ok(x) => (x[positions..].to_vec(), Rounding::NullSpace),
             Err(_) => (eigenvector(), Rounding::Eigenvector),
         }
     };
@@ -228,7 +233,9 @@ pub fn comparison_estimate(
         _ => {
             let penalized = matrix.penalized_dense(&solution.lambda);
             let (_, vectors) = hermitian_eigen(&penalized);
-            (0..n).map(|k| vectors[(n - 1 + k, 0)]).collect()
+            (0..n)
+                .map(|k| vectors[(matrix.positions() + k, 0)])
+                .collect()
         }
     };
     estimate_from_rotations(matrix, &rotations, anchor)

@@ -59,9 +59,17 @@ pub fn spanning_tree_estimate(graph: &PoseGraph) -> Vec<Pose2> {
     let place = |at: Pose2| -> Vec<Pose2> {
         // Pose 0 is the root, at the identity: x_k' = at · x_k.
         let frame = Pose2::new(at.x, at.y, at.theta).to_isometry();
+        // Landmarks (as points) follow the poses, as in every estimate of a landmark graph.
+        let landmarks = tree
+            .landmarks
+            .positions
+            .iter()
+            .map(|&[x, y]| Pose2::new(x, y, 0.0));
         let mut moved: Vec<Pose2> = tree
             .poses
             .iter()
+            .copied()
+            .chain(landmarks)
             .map(|p| Pose2::from_isometry(&(frame * p.to_isometry())))
             .collect();
         moved[0] = at;

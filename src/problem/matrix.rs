@@ -22,11 +22,23 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side, c64};
 
 /// The complex anchored pose graph matrix W̃ of a graph (eq. (24)).
+///
+/// With landmarks (issue 13) the landmark positions l_0..l_{m−1} are more linear variables, rows
+/// n−1..n−1+m of x̃ between the pose positions and the rotations: x̃ = [ρ̃; l̃; r̃]. An observation
+/// of l_k from pose i with measurement d_ik and weight ν adds ν |l_k − p_i − r_i d_ik|², the
+/// translation part of an edge term with p_j replaced by l_k. So the anchored Laplacian L (now
+/// over poses 1..n−1 and the landmarks) and S̃ gain the landmark rows, Q̃ gains ν|d|² on the
+/// diagonal, and W̃ = [[L, S̃], [S̃*, Q̃]] keeps the form of eq. (24): f = x̃* W̃ x̃ (Prop. 5), the
+/// rotation-only matrix M = Q̃ − S̃* L⁻¹ S̃ (eq. (38)) is still n x n, and the dual (31), the
+/// SZEP, Algorithm 1 and the certificate W̃(λ) ⪰ 0 (Theorem 1) apply unchanged: only the
+/// rotations carry constraints |r_i| = 1, the positions of poses and landmarks are free.
 #[derive(Debug, Clone)]
 pub struct PoseGraphMatrix {
     /// Number of poses n.
     pub n: usize,
-    /// W̃, (2n−1) x (2n−1) Hermitian, both triangles stored.
+    /// Number of landmarks m.
+    pub m: usize,
+    /// W̃, (2n−1+m) x (2n−1+m) Hermitian, both triangles stored.
     pub w: SparseColMat<usize, c64>,
 }
 
@@ -41,15 +53,25 @@ pub fn rotation(theta: f64) -> c64 {
 }
 
 impl PoseGraphMatrix {
-    /// W̃ of `graph` with the given edge weights (one per edge).
+    /// W̃ of `graph` with the given weights: one per edge, then one per landmark observation
+    /// ([`crate::problem::weights::edge_weights`]).
     pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
-        assert_eq!(weights.len(), graph.edges.len(), "one weight per edge");
+        let marks = &graph.landmarks;
+        assert_eq!(
+            weights.len(),
+            graph.edges.len() + marks.observations.len(),
+            "one weight per edge and per observation"
+        );
         let n = graph.num_poses();
+        let m = marks.len();
         assert!(n > 0, "a pose graph matrix needs at least one pose");
-        // Positions of poses 1..n at 0..n-1; pose 0 is anchored and has no row.
+        // Positions of poses 1..n at 0..n-1; pose 0 is anchored and has no row; landmarks at
+        // n-1..n-1+m, rotations after them.
         let p = |k: usize| (k > 0).then(|| k - 1);
-        let r = |k: usize| n - 1 + k;
-        let mut t: Vec<Triplet<usize, usize, c64>> = Vec::with_capacity(16 * graph.edges.len());
+        let lm = |k: usize| Some(n - 1 + k);
+        let r = |k: usize| n - 1 + m + k;
+        let mut t: Vec<Triplet<usize, usize, c64>> =
+            Vec::with_capacity(16 * graph.edges.len() + 12 * marks.observations.len());
         // An off-diagonal term v at (a, b) and its conjugate at (b, a); a diagonal term once.
         let mut add = |a: Option<usize>, b: Option<usize>, v: c64| {
             if let (Some(a), Some(b)) = (a, b) {
@@ -57,36 +79,66 @@ impl PoseGraphMatrix {
                 t.push(Triplet::new(b, a, v.conj()));
             }
         };
+        // Diagonal terms are added as halves of a pair.
+        let half = c64::new(0.5, 0.0);
+        // τ |p_j − p_i − Δ r_i|² (the translation part of an edge, or an observation), with κ
+        // (the edge's rotation weight, 0 for an observation) added to the (r_i, r_i) entry, in
+        // the order and roundings of the pose-graph terms.
+        let translation_term = |add: &mut dyn FnMut(Option<usize>, Option<usize>, c64),
+                                pi: Option<usize>,
+                                pj: Option<usize>,
+                                ri: usize,
+                                delta: c64,
+                                tau: f64,
+                                kappa: f64| {
+            let tau_c = c64::new(tau, 0.0);
+            add(pi, pi, half * tau_c);
+            add(pj, pj, half * tau_c);
+            add(pi, pj, -tau_c);
+            add(pi, Some(ri), tau_c * delta);
+            add(pj, Some(ri), -tau_c * delta);
+            add(
+                Some(ri),
+                Some(ri),
+                half * c64::new(tau * delta.norm_sqr() + kappa, 0.0),
+            );
+        };
         for (e, w) in graph.edges.iter().zip(weights) {
             let (i, j) = (e.i, e.j);
             let delta = translation(e.measurement);
             let big_r = rotation(e.measurement.theta);
-            let tau = c64::new(w.tau, 0.0);
+            translation_term(&mut add, p(i), p(j), r(i), delta, w.tau, w.kappa);
             let kappa = c64::new(w.kappa, 0.0);
-            // Diagonal terms are added as halves of a pair.
-            let half = c64::new(0.5, 0.0);
-            add(p(i), p(i), half * tau);
-            add(p(j), p(j), half * tau);
-            add(p(i), p(j), -tau);
-            add(p(i), Some(r(i)), tau * delta);
-            add(p(j), Some(r(i)), -tau * delta);
-            add(
-                Some(r(i)),
-                Some(r(i)),
-                half * c64::new(w.tau * delta.norm_sqr() + w.kappa, 0.0),
-            );
             add(Some(r(j)), Some(r(j)), half * kappa);
             add(Some(r(j)), Some(r(i)), -kappa * big_r);
         }
-        let dim = 2 * n - 1;
+        for (o, w) in marks.observations.iter().zip(&weights[graph.edges.len()..]) {
+            let d = c64::new(o.d[0], o.d[1]);
+            translation_term(
+                &mut add,
+                p(o.pose),
+                lm(o.landmark),
+                r(o.pose),
+                d,
+                w.tau,
+                0.0,
+            );
+        }
+        let dim = 2 * n - 1 + m;
         let w = SparseColMat::try_new_from_triplets(dim, dim, &t)
             .expect("indices are within the matrix");
-        PoseGraphMatrix { n, w }
+        PoseGraphMatrix { n, m, w }
     }
 
-    /// The dimension 2n − 1 of W̃.
+    /// The number of position rows n − 1 + m (poses 1..n−1, then the landmarks): the rotation
+    /// of pose k is row `positions() + k`.
+    pub fn positions(&self) -> usize {
+        self.n - 1 + self.m
+    }
+
+    /// The dimension 2n − 1 + m of W̃.
     pub fn dim(&self) -> usize {
-        2 * self.n - 1
+        2 * self.n - 1 + self.m
     }
 
     /// W̃ as a dense matrix.
@@ -99,17 +151,18 @@ impl PoseGraphMatrix {
         assert_eq!(lambda.len(), self.n);
         let mut w = self.dense();
         for (k, l) in lambda.iter().enumerate() {
-            let d = self.n - 1 + k;
+            let d = self.positions() + k;
             w[(d, d)] -= c64::new(*l, 0.0);
         }
         w
     }
 
     /// The blocks of W̃ = [[L, S̃], [S̃*, Q̃]] (eq. (24)), dense: L is the anchored (weighted)
-    /// Laplacian A^T T A, real; S̃ is (n−1) x n; Q̃ is n x n Hermitian.
+    /// Laplacian A^T T A, real, over poses 1..n−1 and the landmarks; S̃ is (n−1+m) x n; Q̃ is
+    /// n x n Hermitian.
     pub fn blocks(&self) -> (Mat<f64>, Mat<c64>, Mat<c64>) {
         let w = self.dense();
-        let m = self.n - 1;
+        let m = self.positions();
         let l = Mat::from_fn(m, m, |a, b| w[(a, b)].re);
         let s = Mat::from_fn(m, self.n, |a, b| w[(a, m + b)]);
         let q = Mat::from_fn(self.n, self.n, |a, b| w[(m + a, m + b)]);
@@ -122,7 +175,7 @@ impl PoseGraphMatrix {
     /// (a disconnected graph).
     pub fn rotation_matrix(&self) -> Option<Mat<c64>> {
         let (l, s, q) = self.blocks();
-        if self.n == 1 {
+        if self.positions() == 0 {
             return Some(q);
         }
         let x = laplacian_llt(&l)?.solve(&s);
@@ -139,16 +192,17 @@ impl PoseGraphMatrix {
         Some(m)
     }
 
-    /// Positions minimizing f for fixed rotations r̃: ρ̃ = −L⁻¹ S̃ r̃. `None` if L is singular.
+    /// Positions (of poses 1..n−1, then of the landmarks) minimizing f for fixed rotations r̃:
+    /// ρ̃ = −L⁻¹ S̃ r̃. `None` if L is singular.
     pub fn optimal_positions(&self, r: &[c64]) -> Option<Vec<c64>> {
         assert_eq!(r.len(), self.n);
         let (l, s, _) = self.blocks();
-        if self.n == 1 {
+        if self.positions() == 0 {
             return Some(vec![]);
         }
         let rv = Mat::from_fn(self.n, 1, |a, _| r[a]);
         let rho = laplacian_llt(&l)?.solve(-(&s * &rv));
-        Some((0..self.n - 1).map(|a| rho[(a, 0)]).collect())
+        Some((0..self.positions()).map(|a| rho[(a, 0)]).collect())
     }
 
     /// The real anchored pose graph matrix W of eq. (16): each complex entry a + ib of W̃ becomes
@@ -166,27 +220,30 @@ impl PoseGraphMatrix {
         })
     }
 
-    /// x̃ = [ρ̃; r̃] of poses (eq. (20)), anchored at pose 0: ρ̃_k = p_k − p_0 (f is invariant to
-    /// translations), r̃_k = e^{iθ_k}.
+    /// x̃ = [ρ̃; l̃; r̃] of poses (eq. (20)), anchored at pose 0: ρ̃_k = p_k − p_0 (f is invariant
+    /// to translations), r̃_k = e^{iθ_k}. `poses` holds the n poses followed by the m landmarks
+    /// (as points: their θ is not used).
     pub fn state(&self, poses: &[Pose2]) -> Vec<c64> {
-        assert_eq!(poses.len(), self.n);
+        assert_eq!(poses.len(), self.n + self.m);
         let p0 = c64::new(poses[0].x, poses[0].y);
         poses[1..]
             .iter()
             .map(|p| c64::new(p.x, p.y) - p0)
-            .chain(poses.iter().map(|p| rotation(p.theta)))
+            .chain(poses[..self.n].iter().map(|p| rotation(p.theta)))
             .collect()
     }
 
-    /// Poses of a state x̃ = [ρ̃; r̃]: pose 0 at the origin, θ_k = arg r̃_k (any nonzero modulus).
+    /// Poses of a state x̃ = [ρ̃; l̃; r̃]: pose 0 at the origin, θ_k = arg r̃_k (any nonzero
+    /// modulus); the n poses, then the m landmarks as points (θ = 0).
     pub fn poses(&self, x: &[c64]) -> Vec<Pose2> {
         assert_eq!(x.len(), self.dim());
-        let m = self.n - 1;
+        let m = self.positions();
         (0..self.n)
             .map(|k| {
                 let p = if k == 0 { c64::new(0.0, 0.0) } else { x[k - 1] };
                 Pose2::new(p.re, p.im, x[m + k].arg())
             })
+            .chain((0..self.m).map(|k| Pose2::new(x[self.n - 1 + k].re, x[self.n - 1 + k].im, 0.0)))
             .collect()
     }
 
@@ -213,15 +270,33 @@ fn laplacian_llt(l: &Mat<f64>) -> Option<faer::linalg::solvers::Llt<c64>> {
 }
 
 /// The cost f of eq. (8) with per-edge weights, summed edge by edge from the poses (no matrix):
-/// Σ τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|².
+/// Σ τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|², plus Σ ν |l_k − p_i − r_i d|² over the landmark
+/// observations, whose positions follow the n poses in `poses` (when the graph has landmarks).
 pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
-    graph
+    let edges = graph
         .edges
         .iter()
         .zip(weights)
         .map(|(e, w)| edge_cost(e, *w, poses))
         // From +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
-        .fold(0.0, |a, b| a + b)
+        .fold(0.0, |a, b| a + b);
+    let n = graph.num_poses();
+    let marks = &graph.landmarks;
+    if marks.observations.is_empty() {
+        return edges;
+    }
+    edges
+        + marks
+            .observations
+            .iter()
+            .zip(&weights[graph.edges.len()..])
+            .map(|(o, w)| {
+                let (a, l) = (poses[o.pose], poses[n + o.landmark]);
+                let t =
+                    c64::new(l.x - a.x, l.y - a.y) - rotation(a.theta) * c64::new(o.d[0], o.d[1]);
+                w.tau * t.norm_sqr()
+            })
+            .fold(0.0, |a, b| a + b)
 }
 
 /// The term of one edge in the cost f: τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|² (the

@@ -20,25 +20,34 @@ use crate::problem::matrix::{PoseGraphMatrix, rotation, translation};
 use crate::problem::weights::EdgeWeight;
 use faer::c64;
 
-/// One edge's term of f: τ|p_j − p_i − Δ r_i|² + κ|r_j − R r_i|².
+/// One edge's term of f: τ|p_j − p_i − Δ r_i|² + κ|r_j − R r_i|²; or, with `landmark`, one
+/// landmark observation's: ν|l_j − p_i − d r_i|² (`j` the landmark, τ = ν, Δ = d, κ = 0: the
+/// translation part of an edge whose head is the landmark, without a rotation part).
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeTerm {
     pub i: usize,
     pub j: usize,
+    /// Whether `j` is a landmark (an observation) rather than a pose (an edge).
+    pub landmark: bool,
     pub delta: c64,
     pub rot: c64,
     pub tau: f64,
     pub kappa: f64,
 }
 
-/// The problem at rank p: the edges, the matrix W̃ (for its pattern) and the layout.
+/// The problem at rank p: the edges, the matrix W̃ (for its pattern) and the layout. With
+/// landmarks (issue 13) their positions are rows n−1..n−1+m of X, free like the poses'
+/// positions, and the rotations follow them ([`crate::problem::matrix::PoseGraphMatrix`]).
 pub struct Problem {
     pub n: usize,
+    /// Number of landmarks m.
+    pub m: usize,
     pub terms: Vec<EdgeTerm>,
     pub matrix: PoseGraphMatrix,
     /// Upper-triangle entries (row ≤ col) of W̃, diagonal included: (row, col, value).
     pub upper: Vec<(usize, usize, c64)>,
-    /// A fill-reducing rank of each pose ([`crate::linalg::factor::pose_rank`]).
+    /// A fill-reducing rank of each pose, then of each landmark (node n + k)
+    /// ([`crate::linalg::factor::pose_rank`]).
     pub pose_rank: Vec<usize>,
 }
 
@@ -67,6 +76,7 @@ pub(crate) fn dot(a: &[c64], b: &[c64]) -> c64 {
 impl Problem {
     /// The problem of a connected graph with per-edge weights.
     pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
+        let marks = &graph.landmarks;
         let terms = graph
             .edges
             .iter()
@@ -74,11 +84,27 @@ impl Problem {
             .map(|(e, w)| EdgeTerm {
                 i: e.i,
                 j: e.j,
+                landmark: false,
                 delta: translation(e.measurement),
                 rot: rotation(e.measurement.theta),
                 tau: w.tau,
                 kappa: w.kappa,
             })
+            .chain(
+                marks
+                    .observations
+                    .iter()
+                    .zip(&weights[graph.edges.len()..])
+                    .map(|(o, w)| EdgeTerm {
+                        i: o.pose,
+                        j: o.landmark,
+                        landmark: true,
+                        delta: c64::new(o.d[0], o.d[1]),
+                        rot: c64::new(1.0, 0.0),
+                        tau: w.tau,
+                        kappa: 0.0,
+                    }),
+            )
             .collect();
         let matrix = PoseGraphMatrix::new(graph, weights);
         let mut upper = Vec::with_capacity(matrix.w.compute_nnz() / 2 + matrix.dim());
@@ -102,9 +128,18 @@ impl Problem {
             upper.push((k, k, c64::new(0.0, 0.0)));
         }
         let n = graph.num_poses();
-        let pose_rank = crate::linalg::factor::pose_rank(n, graph.edges.iter().map(|e| (e.i, e.j)));
+        let m = marks.len();
+        let pose_rank = crate::linalg::factor::pose_rank(
+            n + m,
+            graph
+                .edges
+                .iter()
+                .map(|e| (e.i, e.j))
+                .chain(marks.observations.iter().map(|o| (o.pose, n + o.landmark))),
+        );
         Problem {
             n,
+            m,
             terms,
             matrix,
             upper,
@@ -112,9 +147,10 @@ impl Problem {
         }
     }
 
-    /// The pose of each row of X (positions of poses 1..n−1, then rotations of 0..n−1).
+    /// The pose of each row of X (positions of poses 1..n−1, the landmarks as nodes n..n+m,
+    /// then rotations of 0..n−1).
     pub fn row_poses(&self) -> Vec<usize> {
-        (1..self.n).chain(0..self.n).collect()
+        (1..self.n + self.m).chain(0..self.n).collect()
     }
 
     /// A fill-reducing order of the rows of X ([`crate::linalg::factor::group_ordering`]).
@@ -126,13 +162,44 @@ impl Problem {
     /// chordal relaxation: [`crate::linalg::factor::group_ordering`] by [`Problem::pose_rank`]), so that
     /// their factorizations need no ordering of their own.
     pub fn anchored_order(&self) -> Vec<usize> {
+        let poses: Vec<usize> = (1..self.n + self.m).collect();
+        crate::linalg::factor::group_ordering(&self.pose_rank, &poses)
+    }
+
+    /// A fill-reducing order of the rotations of poses 1..n−1 (the unknowns of the chordal
+    /// relaxation).
+    pub fn rotation_order(&self) -> Vec<usize> {
         let poses: Vec<usize> = (1..self.n).collect();
         crate::linalg::factor::group_ordering(&self.pose_rank, &poses)
     }
 
-    /// The dimension 2n − 1 (rows of X).
+    /// The dimension 2n − 1 + m (rows of X).
     pub fn rows(&self) -> usize {
-        2 * self.n - 1
+        2 * self.n - 1 + self.m
+    }
+
+    /// The number of position rows n − 1 + m (poses 1..n−1, then the landmarks).
+    pub fn positions(&self) -> usize {
+        self.n - 1 + self.m
+    }
+
+    /// Row of landmark k's position.
+    pub fn landmark_row(&self, k: usize) -> usize {
+        self.n - 1 + k
+    }
+
+    /// Row of the head's position of a term: pose j's (None for the anchor) or landmark j's.
+    pub fn head_position_row(&self, t: &EdgeTerm) -> Option<usize> {
+        if t.landmark {
+            Some(self.landmark_row(t.j))
+        } else {
+            self.position_row(t.j)
+        }
+    }
+
+    /// Row of the head's rotation of a term: pose j's; None for an observation.
+    pub fn head_rotation_row(&self, t: &EdgeTerm) -> Option<usize> {
+        (!t.landmark).then(|| self.rotation_row(t.j))
     }
 
     /// Row of pose k's position (None for the anchor, pose 0).
@@ -142,7 +209,7 @@ impl Problem {
 
     /// Row of pose k's rotation.
     pub fn rotation_row(&self, k: usize) -> usize {
-        self.n - 1 + k
+        self.n - 1 + self.m + k
     }
 
     /// f(X), edge by edge.
@@ -152,12 +219,21 @@ impl Problem {
         let mut f = 0.0;
         for t in &self.terms {
             let pi = self.position_row(t.i).map_or(&zero[..], |r| x.row(r));
-            let pj = self.position_row(t.j).map_or(&zero[..], |r| x.row(r));
+            let pj = self.head_position_row(t).map_or(&zero[..], |r| x.row(r));
             let yi = x.row(self.rotation_row(t.i));
-            let yj = x.row(self.rotation_row(t.j));
-            for c in 0..p {
-                f += t.tau * (pj[c] - pi[c] - t.delta * yi[c]).norm_sqr()
-                    + t.kappa * (yj[c] - t.rot * yi[c]).norm_sqr();
+            match self.head_rotation_row(t) {
+                Some(yj) => {
+                    let yj = x.row(yj);
+                    for c in 0..p {
+                        f += t.tau * (pj[c] - pi[c] - t.delta * yi[c]).norm_sqr()
+                            + t.kappa * (yj[c] - t.rot * yi[c]).norm_sqr();
+                    }
+                }
+                None => {
+                    for c in 0..p {
+                        f += t.tau * (pj[c] - pi[c] - t.delta * yi[c]).norm_sqr();
+                    }
+                }
             }
         }
         f
@@ -170,23 +246,29 @@ impl Problem {
         let zero = vec![c64::new(0.0, 0.0); p];
         for t in &self.terms {
             let ri = self.position_row(t.i);
-            let rj = self.position_row(t.j);
-            let (yi_row, yj_row) = (self.rotation_row(t.i), self.rotation_row(t.j));
+            let rj = self.head_position_row(t);
+            let yi_row = self.rotation_row(t.i);
+            let yj_row = self.head_rotation_row(t);
             for c in 0..p {
                 let pi = ri.map_or(zero[c], |r| x.x[r * p + c]);
                 let pj = rj.map_or(zero[c], |r| x.x[r * p + c]);
                 let yi = x.x[yi_row * p + c];
-                let yj = x.x[yj_row * p + c];
                 let et = (pj - pi - t.delta * yi) * t.tau;
-                let er = (yj - t.rot * yi) * t.kappa;
                 if let Some(r) = rj {
                     g[r * p + c] += et;
                 }
                 if let Some(r) = ri {
                     g[r * p + c] -= et;
                 }
-                g[yi_row * p + c] -= t.delta.conj() * et + t.rot.conj() * er;
-                g[yj_row * p + c] += er;
+                match yj_row {
+                    Some(yj_row) => {
+                        let yj = x.x[yj_row * p + c];
+                        let er = (yj - t.rot * yi) * t.kappa;
+                        g[yi_row * p + c] -= t.delta.conj() * et + t.rot.conj() * er;
+                        g[yj_row * p + c] += er;
+                    }
+                    None => g[yi_row * p + c] -= t.delta.conj() * et,
+                }
             }
         }
         g
@@ -215,20 +297,32 @@ impl Problem {
         };
         for t in &self.terms {
             let ri = self.position_row(t.i);
-            let rj = self.position_row(t.j);
-            let (yi_row, yj_row) = (self.rotation_row(t.i), self.rotation_row(t.j));
+            let rj = self.head_position_row(t);
+            let yi_row = self.rotation_row(t.i);
+            // An observation has no rotation part: its κ = 0 term is evaluated on y_j = R y_i
+            // exactly (er = 0), and nothing is added to a head rotation it does not have.
+            let yj_row = self.head_rotation_row(t);
             let (dn, rn) = (t.delta.norm(), t.rot.norm());
             for c in 0..p {
                 let pi = ri.map_or(zero, |r| x.x[r * p + c]);
                 let pj = rj.map_or(zero, |r| x.x[r * p + c]);
-                let (yi, yj) = (x.x[yi_row * p + c], x.x[yj_row * p + c]);
+                let yi = x.x[yi_row * p + c];
+                let yj = yj_row.map_or(t.rot * yi, |r| x.x[r * p + c]);
                 // Residuals: one rounding for P_j − P_i, √2γ₂ for each complex product, one
                 // for the last subtraction (each component), all within 4u of the moduli.
                 let d = pj - pi;
                 let et = d - t.delta * yi;
-                let er = yj - t.rot * yi;
+                let er = if yj_row.is_some() {
+                    yj - t.rot * yi
+                } else {
+                    zero
+                };
                 let det = 4.0 * U * (d.norm() + dn * yi.norm() + et.norm());
-                let der = 4.0 * U * (yj.norm() + rn * yi.norm() + er.norm());
+                let der = if yj_row.is_some() {
+                    4.0 * U * (yj.norm() + rn * yi.norm() + er.norm())
+                } else {
+                    0.0
+                };
                 let (nt, nr) = (et.norm(), er.norm());
                 cost += t.tau * et.norm_sqr() + t.kappa * er.norm_sqr();
                 cost_error += t.tau * ((2.0 * nt + det) * det + 4.0 * U * nt * nt)
@@ -245,7 +339,9 @@ impl Problem {
                 let back = t.delta.conj() * wt + t.rot.conj() * wr;
                 let eback = dn * ewt + rn * ewr + 4.0 * U * (dn * wt.norm() + rn * wr.norm());
                 add(yi_row * p + c, -back, eback, &mut g);
-                add(yj_row * p + c, wr, ewr, &mut g);
+                if let Some(yj_row) = yj_row {
+                    add(yj_row * p + c, wr, ewr, &mut g);
+                }
             }
         }
         for k in 0..g.len() {

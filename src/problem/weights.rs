@@ -38,47 +38,73 @@ pub struct EdgeWeight {
     pub kappa: f64,
 }
 
-/// The weights of every edge of `graph` under `policy`. Isotropic weights need positive,
-/// finite τ and κ: an edge whose information matrix does not give them is an error naming it.
+/// The weights of every edge of `graph` under `policy`, followed by one per landmark
+/// observation (in input order): ν as `tau` and `kappa` = 0, the term ν |l_k − p_i − r_i d_ik|²
+/// having no rotation part. Isotropic weights need positive, finite τ and κ (ν): an edge or
+/// observation whose information matrix does not give them is an error naming it.
+///
+/// ν = 2 / tr(Ω_ik⁻¹) under `Isotropic` (CPL-SLAM's rule, the same as τ's), 1 under `Unit`.
 pub fn edge_weights(graph: &PoseGraph, policy: Weights) -> Result<Vec<EdgeWeight>, Error> {
-    graph
-        .edges
-        .iter()
-        .map(|e| match policy {
-            Weights::Unit => Ok(EdgeWeight {
-                tau: 1.0,
-                kappa: 1.0,
-            }),
-            Weights::Isotropic => {
-                let bad = |why: &str| {
-                    Error::Invalid(format!(
-                        "edge {} -> {}: {why}, so it has no isotropic weights (use --weights unit)",
-                        graph.ids[e.i], graph.ids[e.j]
-                    ))
-                };
-                let info = graph
-                    .information(e)
-                    .ok_or_else(|| bad("its covariance is singular"))?;
-                let [a, b, _, d, _, f] = info.0;
-                // tr(Ω_tt⁻¹) = (a + d) / det(Ω_tt) for Ω_tt = [[a, b], [b, d]], computed on
-                // Ω_tt / s, s = max(a, d), so that det does not overflow (or underflow) for
-                // entries near 1e±200 whose τ is representable.
-                let s = a.abs().max(d.abs());
-                let (a, b, d) = (a / s, b / s, d / s);
-                let tau = 2.0 * s * ((a * d - b * b) / (a + d));
-                let kappa = 2.0 * f;
-                if !(tau > 0.0 && kappa > 0.0) {
-                    return Err(bad("its information matrix is not positive definite"));
-                }
-                if !(tau.is_finite() && kappa.is_finite()) {
-                    return Err(bad(
-                        "its information values are so large that the weights overflow a 64-bit float",
-                    ));
-                }
-                Ok(EdgeWeight { tau, kappa })
+    let edges = graph.edges.iter().map(|e| match policy {
+        Weights::Unit => Ok(EdgeWeight {
+            tau: 1.0,
+            kappa: 1.0,
+        }),
+        Weights::Isotropic => {
+            let bad = |why: &str| {
+                Error::Invalid(format!(
+                    "edge {} -> {}: {why}, so it has no isotropic weights (use --weights unit)",
+                    graph.ids[e.i], graph.ids[e.j]
+                ))
+            };
+            let info = graph
+                .information(e)
+                .ok_or_else(|| bad("its covariance is singular"))?;
+            let [a, b, _, d, _, f] = info.0;
+            let tau = isotropic_precision(a, b, d);
+            let kappa = 2.0 * f;
+            if !(tau > 0.0 && kappa > 0.0) {
+                return Err(bad("its information matrix is not positive definite"));
             }
+            if !(tau.is_finite() && kappa.is_finite()) {
+                return Err(bad(
+                    "its information values are so large that the weights overflow a 64-bit float",
+                ));
+            }
+            Ok(EdgeWeight { tau, kappa })
+        }
+    });
+    let marks = &graph.landmarks;
+    let observations = marks.observations.iter().map(|o| {
+        let nu = match policy {
+            Weights::Unit => 1.0,
+            Weights::Isotropic => {
+                let [a, b, d] = o.information.0;
+                let nu = isotropic_precision(a, b, d);
+                if !(nu > 0.0 && nu.is_finite()) {
+                    return Err(Error::Invalid(format!(
+                        "observation of landmark {} from pose {}: its information matrix is not positive definite or overflows, so it has no isotropic weight (use --weights unit)",
+                        marks.ids[o.landmark], graph.ids[o.pose]
+                    )));
+                }
+                nu
+            }
+        };
+        Ok(EdgeWeight {
+            tau: nu,
+            kappa: 0.0,
         })
-        .collect()
+    });
+    edges.chain(observations).collect()
+}
+
+/// 2 / tr(Ω⁻¹) for the 2x2 Ω = [[a, b], [b, d]]: tr(Ω⁻¹) = (a + d) / det(Ω), computed on Ω / s,
+/// s = max(|a|, |d|), so that det does not overflow (or underflow) for entries near 1e±200 whose
+/// precision is representable.
+fn isotropic_precision(a: f64, b: f64, d: f64) -> f64 {
+    let s = a.abs().max(d.abs());
+    let (a, b, d) = (a / s, b / s, d / s);
+    2.0 * s * ((a * d - b * b) / (a + d))
 }
 
 #[cfg(test)]
@@ -99,6 +125,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: true,
             noise: kind,
+            landmarks: Default::default(),
         }
     }
 

@@ -155,6 +155,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Default::default(),
         }
     }
 

@@ -34,6 +34,13 @@
 //! predicted decrease), λ ← λ · min(2/3, max(1/3, 1 − (2ρ − 1)³)) and ν ← 2 (Nielsen's rule with
 //! g2o's bounds); a rejected step or a failed factorization sets λ ← λ ν, ν ← 2ν.
 //!
+//! Landmarks (issue 13): a landmark l_k is one more vertex after the n poses, (x, y) with a θ
+//! that nothing measures, and its observation from pose i with measurement d and 2x2 information
+//! Ω_ik is g2o's `EdgeSE2PointXY`, e = R_iᵀ (l_k − t_i) − d, which is exactly the edge error above
+//! with z = (d, 0) and the information [[Ω_ik, 0], [0, 0]] (the θ row of e weighs nothing): so
+//! it is one more [`Factor`], the full 2x2 information kept. The landmark's θ gets no gradient
+//! and only the damping on its diagonal, so it never moves.
+//!
 //! Gauge: the graph's FIX poses are held; every connected component without one holds its
 //! first pose (smallest index). Held poses are returned unchanged.
 
@@ -156,17 +163,39 @@ pub fn edge_error(xi: Pose2, xj: Pose2, z: Pose2) -> [f64; 3] {
 ///
 /// If an edge refers to a pose outside `poses`.
 pub fn chi2(graph: &PoseGraph, poses: &[Pose2]) -> f64 {
-    graph
+    let edges: f64 = graph
         .edges
         .iter()
         .map(|e| match graph.information(e) {
             Some(info) => Factor::new(e.i, e.j, e.measurement, info).chi2(poses),
             None => f64::NAN,
         })
-        .sum()
+        .sum();
+    edges + landmark_chi2(graph, poses)
+}
+
+/// g2o's chi2 of the landmark observations (`EdgeSE2PointXY`): e = R(θ_i)ᵀ (l_k − p_i) − d,
+/// Σ eᵀ Ω_ik e, with the landmark positions after the n poses in `poses` (0 without landmarks).
+pub fn landmark_chi2(graph: &PoseGraph, poses: &[Pose2]) -> f64 {
+    let n = graph.num_poses();
+    graph
+        .landmarks
+        .observations
+        .iter()
+        .map(|o| {
+            let (x, l) = (poses[o.pose], poses[n + o.landmark]);
+            let (s, c) = x.theta.sin_cos();
+            let (dx, dy) = (l.x - x.x, l.y - x.y);
+            let e = [c * dx + s * dy - o.d[0], -s * dx + c * dy - o.d[1]];
+            let [a, b, d] = o.information.0;
+            a * e[0] * e[0] + 2.0 * b * e[0] * e[1] + d * e[1] * e[1]
+        })
+        .fold(0.0, |a, b| a + b)
 }
 
 /// Levenberg-Marquardt from `initial` on g2o's chi2 (module docs: retraction, damping, gauge).
+/// `initial` holds one pose per pose of `graph`, then one per landmark (its position; θ unused),
+/// and so does the result.
 ///
 /// Stops when a trial step changes chi2 by less than `options.tol · chi2` (converged), after
 /// `options.max_iterations` iterations, or when `options.max_trials` damped trials in a row
@@ -283,10 +312,24 @@ pub fn refine(
 /// Checks what chi2 needs and returns one [`Factor`] per edge.
 fn validate(graph: &PoseGraph, initial: &[Pose2]) -> Result<Vec<Factor>, RefineError> {
     let n = graph.num_poses();
-    if initial.len() != n {
+    let marks = &graph.landmarks;
+    if initial.len() != n + marks.len() {
         return Err(RefineError::PoseCount {
-            expected: n,
+            expected: n + marks.len(),
             found: initial.len(),
+        });
+    }
+    if let Some((k, o)) = marks
+        .observations
+        .iter()
+        .enumerate()
+        .find(|(_, o)| o.pose >= n || o.landmark >= marks.len())
+    {
+        let index = if o.pose >= n { o.pose } else { n + o.landmark };
+        return Err(RefineError::IndexOutOfRange {
+            what: format!("landmark observation {k}"),
+            index,
+            n: n + marks.len(),
         });
     }
     let out_of_range = |what: String, index: usize| RefineError::IndexOutOfRange { what, index, n };
@@ -300,8 +343,30 @@ fn validate(graph: &PoseGraph, initial: &[Pose2]) -> Result<Vec<Factor>, RefineE
     }
     let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
     if let Some(k) = initial.iter().position(|p| !finite(&p.values())) {
-        return Err(RefineError::NonFinitePose { id: graph.ids[k] });
+        let id = if k < n {
+            graph.ids[k]
+        } else {
+            marks.ids[k - n]
+        };
+        return Err(RefineError::NonFinitePose { id });
     }
+    let observations = marks.observations.iter().enumerate().map(|(k, o)| {
+        let [a, b, d] = o.information.0;
+        if !finite(&o.d) || !finite(&o.information.0) {
+            return Err(RefineError::NonFiniteEdge {
+                edge: graph.edges.len() + k,
+                from: graph.ids[o.pose],
+                to: marks.ids[o.landmark],
+                what: "the landmark observation",
+            });
+        }
+        Ok(Factor::new(
+            o.pose,
+            n + o.landmark,
+            Pose2::new(o.d[0], o.d[1], 0.0),
+            SymMat3([a, b, 0.0, d, 0.0, 0.0]),
+        ))
+    });
     graph
         .edges
         .iter()
@@ -325,6 +390,7 @@ fn validate(graph: &PoseGraph, initial: &[Pose2]) -> Result<Vec<Factor>, RefineE
                 .ok_or(RefineError::SingularCovariance { edge: k, from, to })?;
             Ok(Factor::new(e.i, e.j, e.measurement, info))
         })
+        .chain(observations)
         .collect()
 }
 
@@ -718,6 +784,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Default::default(),
         };
         // x_i = (1, 2, π/2), x_j = (1, 5, π): x_i⁻¹ x_j = (R(−π/2)(0, 3), π/2) = (3, 0, π/2).
         // z = (2, 1, π/4): e = (R(−π/4)(1, −1), π/4) = (0, −√2, π/4), so with Ω = OMEGA

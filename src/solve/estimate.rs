@@ -66,7 +66,8 @@ pub struct EstimateReport {
     pub components: Vec<EstimateComponent>,
 }
 
-/// Bounds the suboptimality of `estimate` (one pose per pose of `graph`, in its order): the
+/// Bounds the suboptimality of `estimate` (one pose per pose of `graph`, in its order, followed
+/// by one per landmark when it has landmarks: their positions, θ unused): the
 /// estimate's own multipliers λ from the first-order conditions and the sparse certificate; where
 /// they do not certify it within the tolerance, the proven bound of the optimum (the staircase),
 /// whichever is higher. `source` names the estimate in messages.
@@ -82,7 +83,19 @@ pub fn certify_estimate(
     for (part, members, _) in graph.components() {
         let weights = edge_weights(&part, options.weights)?;
         check_edge_terms(&part, &weights, &weights)?;
-        let poses: Vec<Pose2> = members.iter().map(|&k| estimate[k]).collect();
+        // The n poses, then the component's landmarks (as points), as the problem takes them.
+        let total = graph.num_poses();
+        let poses: Vec<Pose2> = members
+            .iter()
+            .map(|&k| estimate[k])
+            .chain(part.landmarks.ids.iter().map(|id| {
+                let k = graph
+                    .landmarks
+                    .index_of(*id)
+                    .expect("a component's landmarks are the graph's");
+                estimate[total + k]
+            }))
+            .collect();
         let n = part.num_poses();
         let cost = cost(&part, &weights, &poses);
         if !cost.is_finite() {

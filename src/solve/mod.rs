@@ -89,6 +89,10 @@ impl Default for SolveOptions {
     }
 }
 
+fn is_zero(v: &usize) -> bool {
+    *v == 0
+}
+
 /// The result of one connected component.
 #[derive(Debug, Serialize)]
 pub struct ComponentReport {
@@ -96,6 +100,11 @@ pub struct ComponentReport {
     pub first_id: u32,
     pub poses: usize,
     pub edges: usize,
+    /// Landmarks and their observations in the component (absent from JSON when none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub landmarks: usize,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub observations: usize,
     pub cost: f64,
     pub lower_bound: f64,
     pub suboptimality_bound: f64,
@@ -150,6 +159,11 @@ pub struct Solution {
     pub weights: Weights,
     pub poses: usize,
     pub edges: usize,
+    /// Landmarks and observations (absent from JSON when none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub landmarks: usize,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub observations: usize,
     /// f at the certified estimate.
     pub cost: f64,
     /// g2o's chi2 of the certified estimate: Σ eᵀΩe under the full information matrices (another
@@ -180,6 +194,10 @@ pub struct Solution {
     /// in (-π, π] (a FIX pose's as read).
     #[serde(skip)]
     pub estimate: Vec<Pose2>,
+    /// The landmark positions, one per landmark of the graph, in its order, in the same gauge
+    /// (landmarks seen by no pose as read).
+    #[serde(skip)]
+    pub landmark_estimate: Vec<[f64; 2]>,
 }
 
 /// Solves every connected component of `graph` to a certified optimum where the relaxation is
@@ -199,6 +217,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
     check_fixed(graph)?;
     let mut components = Vec::new();
     let mut estimate = graph.poses.clone();
+    let mut landmark_estimate = graph.landmarks.positions.clone();
     let staircase = StaircaseOptions {
         tolerance: options.tolerance,
         max_rank: options.max_rank,
@@ -281,9 +300,19 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
                 pose.theta = wrap_angle(pose.theta);
             }
         }
-        for (pose, &k) in poses.iter().zip(&members) {
+        let np = part.num_poses();
+        for (pose, &k) in poses[..np].iter().zip(&members) {
             estimate[k] = *pose;
         }
+        for (p, id) in poses[np..].iter().zip(&part.landmarks.ids) {
+            let k = graph
+                .landmarks
+                .index_of(*id)
+                .expect("a component's landmarks are the graph's");
+            landmark_estimate[k] = [p.x, p.y];
+        }
+        report.landmarks = part.landmarks.len();
+        report.observations = part.landmarks.observations.len();
         components.push(report);
     }
     // Folded from +0: an empty sum of f64 is -0 in Rust, and a graph without edges costs 0.
@@ -299,6 +328,8 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         weights: options.weights,
         poses: graph.num_poses(),
         edges: graph.edges.len(),
+        landmarks: graph.landmarks.len(),
+        observations: graph.landmarks.observations.len(),
         cost,
         chi2,
         lower_bound,
@@ -314,6 +345,7 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
         sdp_converged: components.iter().all(|c| c.sdp_converged != Some(false)),
         components,
         estimate,
+        landmark_estimate,
     })
 }
 
@@ -387,6 +419,8 @@ fn component_report(
         first_id: part.ids[0],
         poses: part.num_poses(),
         edges: part.edges.len(),
+        landmarks: part.landmarks.len(),
+        observations: part.landmarks.observations.len(),
         cost,
         lower_bound,
         suboptimality_bound,

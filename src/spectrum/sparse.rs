@@ -39,6 +39,7 @@ pub fn sparse_spectra(
 ) -> Result<SparseSpectra, Error> {
     let problem = Problem::new(graph, weights);
     let n = problem.n;
+    let positions = problem.positions();
     assert_eq!(lambda.len(), n, "one multiplier per pose");
     let dim = problem.rows();
     let order = problem.row_order();
@@ -56,8 +57,8 @@ pub fn sparse_spectra(
         .upper
         .iter()
         .map(|&(r, c, v)| {
-            if r == c && r >= n - 1 {
-                (r, c, v - c64::new(lambda[r - (n - 1)], 0.0))
+            if r == c && r >= positions {
+                (r, c, v - c64::new(lambda[r - positions], 0.0))
             } else {
                 (r, c, v)
             }
@@ -78,7 +79,7 @@ pub fn sparse_spectra(
     let wl = smallest_eigenvalues(&pencil(&penalized, 0..dim, &wl_form), count, &options)
         .map_err(|_| overflow())?;
     let m = smallest_eigenvalues(
-        &pencil(&problem.upper, n - 1..dim, &w_form),
+        &pencil(&problem.upper, positions..dim, &w_form),
         count,
         &options,
     )
@@ -103,12 +104,14 @@ fn edge_form(problem: &Problem, lambda: Option<&[f64]>, z: &Mat<c64>) -> Mat<c64
     let mut h = Mat::<c64>::zeros(b, b);
     let (mut et, mut er) = (vec![zero; b], vec![zero; b]);
     for t in &problem.terms {
-        let (yi, yj) = (problem.rotation_row(t.i), problem.rotation_row(t.j));
-        let (pi, pj) = (problem.position_row(t.i), problem.position_row(t.j));
+        let yi = problem.rotation_row(t.i);
+        let yj = problem.head_rotation_row(t);
+        let (pi, pj) = (problem.position_row(t.i), problem.head_position_row(t));
         for c in 0..b {
             let p = |row: Option<usize>| row.map_or(zero, |r| z[(r, c)]);
             et[c] = p(pj) - p(pi) - t.delta * z[(yi, c)];
-            er[c] = z[(yj, c)] - t.rot * z[(yi, c)];
+            // An observation has no rotation part (κ = 0).
+            er[c] = yj.map_or(zero, |yj| z[(yj, c)] - t.rot * z[(yi, c)]);
         }
         for c in 0..b {
             let (tc, rc) = (et[c] * t.tau, er[c] * t.kappa);

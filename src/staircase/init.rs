@@ -32,7 +32,8 @@ pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
             values.push(v.conj());
         }
     };
-    for t in &problem.terms {
+    // Landmark observations have no rotation part (κ = 0): they add nothing here.
+    for t in problem.terms.iter().filter(|t| !t.landmark) {
         let k = c64::new(t.kappa, 0.0);
         // κ|r_j − R r_i|²: κ at (i,i) and (j,j), −κR at (j,i), −κR̄ at (i,j).
         match (t.i.checked_sub(1), t.j.checked_sub(1)) {
@@ -56,7 +57,7 @@ pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
             (None, None) => {}
         }
     }
-    let mut factor = anchored_llt(problem, &entries, &values)?;
+    let mut factor = anchored_llt(n - 1, &problem.rotation_order(), &entries, &values)?;
     factor.solve_in_place(&mut rhs);
     Some(
         std::iter::once(one)
@@ -68,22 +69,64 @@ pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
     )
 }
 
-/// The LLᴴ of a Hermitian matrix on the rows of poses 1..n−1 (upper-triangle entries, duplicates
-/// summed), in the problem's fill-reducing pose order. `None` if it is not numerically positive
-/// definite.
+/// The chordal relaxation of the whole problem, for graphs with landmarks: minimize
+/// x̃* W̃ x̃ (eq. (24)) over the positions of poses and landmarks and the rotations with
+/// |r_i| = 1 dropped and r_0 = 1, a sparse linear least-squares problem whose normal equations
+/// are W̃ without the row and column of r_0; then each r_i normalized. Unlike
+/// [`chordal_rotations`] it sees the landmark observations, the only loop closures of a
+/// landmark graph such as Victoria Park's (the rotations alone see only the odometry).
+/// `None` if that matrix is not numerically positive definite.
+pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
+    let r0 = problem.rotation_row(0);
+    let dim = problem.rows() - 1;
+    let at = |k: usize| if k < r0 { k } else { k - 1 };
+    let mut entries = Vec::with_capacity(problem.upper.len());
+    let mut values = Vec::with_capacity(problem.upper.len());
+    let mut rhs = vec![c64::new(0.0, 0.0); dim];
+    for &(a, b, v) in &problem.upper {
+        match (a == r0, b == r0) {
+            (true, true) => {}
+            // W̃ y = −W̃[:, r0] · 1: the column of r0 moves to the right-hand side.
+            (false, true) => rhs[at(a)] -= v,
+            (true, false) => rhs[at(b)] -= v.conj(),
+            (false, false) => {
+                entries.push((at(a), at(b)));
+                values.push(v);
+            }
+        }
+    }
+    let order: Vec<usize> = problem
+        .row_order()
+        .into_iter()
+        .filter(|&k| k != r0)
+        .map(at)
+        .collect();
+    let mut factor = anchored_llt(dim, &order, &entries, &values)?;
+    factor.solve_in_place(&mut rhs);
+    let one = c64::new(1.0, 0.0);
+    Some(
+        std::iter::once(one)
+            .chain((1..problem.n).map(|k| {
+                let z = rhs[at(problem.rotation_row(k))];
+                let m = z.norm();
+                if m > 0.0 && m.is_finite() { z / m } else { one }
+            }))
+            .collect(),
+    )
+}
+
+/// The LLᴴ of a `dim` x `dim` Hermitian matrix (upper-triangle entries, duplicates summed), in
+/// the given fill-reducing order. `None` if it is not numerically positive definite.
 fn anchored_llt(
-    problem: &Problem,
+    dim: usize,
+    order: &[usize],
     entries: &[(usize, usize)],
     values: &[c64],
 ) -> Option<SparseFactor<c64>> {
-    let mut assembly = Assembly::<c64>::new(problem.n - 1, entries);
+    let mut assembly = Assembly::<c64>::new(dim, entries);
     assembly.fill(values);
-    let mut factor = SparseFactor::analyze_ordered(
-        assembly.matrix.symbolic(),
-        &problem.anchored_order(),
-        Layout::Auto,
-    );
-    if problem.n > 1 {
+    let mut factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
+    if dim > 0 {
         factor.llt(assembly.matrix.as_ref()).ok()?;
     }
     Some(factor)
@@ -92,10 +135,9 @@ fn anchored_llt(
 /// The rank-1 point [ρ̃; r̃] with the given rotations and the positions optimal for them.
 /// `None` if the graph is not connected.
 pub fn with_optimal_positions(problem: &Problem, r: &[c64]) -> Option<Point> {
-    let n = problem.n;
     let mut x = Point {
         p: 1,
-        x: vec![c64::new(0.0, 0.0); n - 1]
+        x: vec![c64::new(0.0, 0.0); problem.positions()]
             .into_iter()
             .chain(r.iter().copied())
             .collect(),
@@ -119,7 +161,7 @@ impl OptimalPositions {
         let mut values = Vec::with_capacity(3 * problem.terms.len());
         for t in &problem.terms {
             let tau = c64::new(t.tau, 0.0);
-            let (i, j) = (t.i.checked_sub(1), t.j.checked_sub(1));
+            let (i, j) = (problem.position_row(t.i), problem.head_position_row(t));
             for a in [i, j].into_iter().flatten() {
                 entries.push((a, a));
                 values.push(tau);
@@ -132,24 +174,29 @@ impl OptimalPositions {
             }
         }
         // Every pose's diagonal, so that a pose without edges makes L singular, not malformed.
-        for a in 0..problem.n - 1 {
+        for a in 0..problem.positions() {
             entries.push((a, a));
             values.push(c64::new(0.0, 0.0));
         }
-        let factor = anchored_llt(problem, &entries, &values)?;
+        let factor = anchored_llt(
+            problem.positions(),
+            &problem.anchored_order(),
+            &entries,
+            &values,
+        )?;
         Some(OptimalPositions { factor })
     }
 
     /// Replaces the positions of `x` with the ones optimal for its rotations.
     pub fn apply(&mut self, problem: &Problem, x: &mut Point) {
-        let (n, p) = (problem.n, x.p);
-        if n == 1 {
+        let (positions, p) = (problem.positions(), x.p);
+        if positions == 0 {
             return;
         }
         // At ρ̃ = 0 the position rows of W̃x̃ are S̃r̃; then ρ̃ = −L⁻¹S̃r̃.
-        x.x[..(n - 1) * p].fill(c64::new(0.0, 0.0));
+        x.x[..positions * p].fill(c64::new(0.0, 0.0));
         let g = problem.half_gradient(x);
-        let mut rhs = vec![c64::new(0.0, 0.0); n - 1];
+        let mut rhs = vec![c64::new(0.0, 0.0); positions];
         for c in 0..p {
             for (k, v) in rhs.iter_mut().enumerate() {
                 *v = -g[k * p + c];

@@ -28,7 +28,7 @@ impl TangentBasis {
         let mut vectors = Vec::with_capacity(rows * 2 * p * p);
         for k in 0..rows {
             offsets.push(vectors.len() / p);
-            if k < problem.n - 1 {
+            if k < problem.positions() {
                 position_basis(p, &mut vectors);
             } else {
                 sphere_basis(x.row(k), &mut vectors);
@@ -89,7 +89,7 @@ impl TangentBasis {
     /// Levenberg-Marquardt damping), in the order of [`TangentBasis::hessian_pattern`].
     pub fn hessian_values(&self, problem: &Problem, lambda: &[f64], mu: f64, out: &mut Vec<f64>) {
         out.clear();
-        let n = problem.n;
+        let positions = problem.positions();
         for &(k, l, w) in &problem.upper {
             for s in 0..self.len(k) {
                 let bs = self.vector(k, s);
@@ -105,8 +105,8 @@ impl TangentBasis {
                             .map(|(x, y)| (x.conj() * w * y).re)
                             .sum::<f64>();
                     if a == b {
-                        if k >= n - 1 {
-                            v -= 2.0 * lambda[k - (n - 1)];
+                        if k >= positions {
+                            v -= 2.0 * lambda[k - positions];
                         }
                         v += mu * 2.0 * w.re;
                     }
@@ -131,8 +131,8 @@ impl TangentBasis {
 
     /// The point moved along tangent coordinates δ: positions X_k + Bδ, rotations
     /// (Y_a + Bδ)/‖Y_a + Bδ‖ (the projection retraction, second order, so Newton keeps its
-    /// quadratic convergence).
-    pub fn retract(&self, x: &Point, delta: &[f64], n: usize) -> Point {
+    /// quadratic convergence). Rows from `positions` on are rotations.
+    pub fn retract(&self, x: &Point, delta: &[f64], positions: usize) -> Point {
         let p = self.p;
         let mut y = x.clone();
         for k in 0..self.offsets.len() - 1 {
@@ -144,7 +144,7 @@ impl TangentBasis {
                     *z += b * d;
                 }
             }
-            if k >= n - 1 {
+            if k >= positions {
                 let norm = row.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
                 for z in row.iter_mut() {
                     *z /= norm;

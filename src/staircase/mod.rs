@@ -190,6 +190,9 @@ impl Anchored {
                 e.i = swap(e.i);
                 e.j = swap(e.j);
             }
+            for o in &mut moved.landmarks.observations {
+                o.pose = swap(o.pose);
+            }
             Problem::new(&moved, weights)
         };
         Anchored { problem, anchor }
@@ -259,10 +262,28 @@ pub fn solve_anchored(
     // or its spanning-tree composition for edges-only files), so the problem is built once.
     crate::progress::phase("initialization (chordal)");
     let anchored = Anchored::centered(graph, weights, &graph.poses);
-    let r = chordal_rotations(&anchored.problem)?;
+    // With landmarks, the chordal relaxation of the whole problem ([`init::chordal_full`]).
+    // Poses joined only through landmarks have no rotation measurement between them: the
+    // chordal relaxation of the rotations is then singular, and the rotations of the input's estimate (the
+    // file's, or composed along the spanning tree through the landmarks) start instead.
+    let full = || {
+        (!graph.landmarks.is_empty())
+            .then(|| crate::staircase::init::chordal_full(&anchored.problem))
+            .flatten()
+    };
+    let r = full()
+        .or_else(|| chordal_rotations(&anchored.problem))
+        .or_else(|| {
+            (!graph.landmarks.is_empty()).then(|| {
+                let swap = swapper(anchored.anchor);
+                (0..graph.num_poses())
+                    .map(|k| crate::problem::matrix::rotation(graph.poses[swap(k)].theta))
+                    .collect()
+            })
+        })?;
     let start = Point {
         p: 1,
-        x: vec![c64::new(0.0, 0.0); anchored.problem.n - 1]
+        x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
             .into_iter()
             .chain(r)
             .collect(),
@@ -390,7 +411,7 @@ pub fn optimize_to(
         let predicted_at =
             |alpha: f64| alpha * (1.0 - 0.5 * alpha) * -gd + 0.5 * alpha * alpha * mu * dd;
         let predicted = predicted_at(1.0);
-        let mut trial = at.basis.retract(&at.x, &delta, problem.n);
+        let mut trial = at.basis.retract(&at.x, &delta, problem.positions());
         project(&mut trial);
         let trial_cost = problem.cost(&trial);
         let rho = (at.cost - trial_cost) / predicted;
@@ -433,7 +454,7 @@ pub fn optimize_to(
         // μ grows by Nielsen's rule and the system is solved again.
         let shortened = [0.5, 0.25].into_iter().find_map(|alpha| {
             let step: Vec<f64> = delta.iter().map(|d| alpha * d).collect();
-            let mut trial = at.basis.retract(&at.x, &step, problem.n);
+            let mut trial = at.basis.retract(&at.x, &step, problem.positions());
             project(&mut trial);
             let trial_cost = problem.cost(&trial);
             let predicted = predicted_at(alpha);
@@ -507,7 +528,7 @@ pub fn polish(problem: &Problem, local: Local) -> Local {
         // (H + μD)δ = −2Bᵀg: the Riemannian gradient is twice the half gradient's coordinates.
         let mut delta: Vec<f64> = grad.iter().map(|v| -2.0 * v).collect();
         system.solve_in_place(&mut delta);
-        let trial = basis.retract(&local.point, &delta, problem.n);
+        let trial = basis.retract(&local.point, &delta, problem.positions());
         let cost = problem.cost(&trial);
         let g_trial = problem.half_gradient(&trial);
         let basis_trial = TangentBasis::new(problem, &trial);
@@ -747,7 +768,7 @@ fn escape(
     certifier: &mut SparseCertifier,
     factor: &mut Option<SparseFactor<c64>>,
 ) -> Option<Point> {
-    let n = problem.n;
+    let positions = problem.positions();
     let rows = problem.rows();
     let a = certifier.penalized_matrix(&local.lambda);
     let f = factor.get_or_insert_with(|| SparseFactor::analyze_simplicial(a.symbolic()));
@@ -764,9 +785,9 @@ fn escape(
         if curvature >= 0.0 || curvature.is_nan() {
             continue;
         }
-        let big = v[n - 1..]
+        let big = v[positions..]
             .iter()
-            .chain(&v[..n - 1])
+            .chain(&v[..positions])
             .fold(0.0f64, |m, z| m.max(z.norm()));
         if !(big > 0.0 && big.is_finite()) {
             continue;
@@ -780,7 +801,7 @@ fn escape(
             for (k, vk) in v.iter().enumerate().take(rows) {
                 let row = local.point.row(k);
                 let mut new: Vec<c64> = row.iter().copied().chain([vk * eps]).collect();
-                if k >= n - 1 {
+                if k >= positions {
                     let norm = new.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
                     for z in &mut new {
                         *z /= norm;
@@ -830,7 +851,7 @@ pub fn round_to_rank_one(problem: &Problem, x: &Point) -> Point {
     let mut out = Vec::with_capacity(problem.rows());
     for k in 0..problem.rows() {
         let z: c64 = x.row(k).iter().zip(&u).map(|(a, b)| a * b).sum();
-        out.push(if k >= n - 1 {
+        out.push(if k >= problem.positions() {
             let m = z.norm();
             if m > 0.0 { z / m } else { c64::new(1.0, 0.0) }
         } else {

@@ -3,8 +3,9 @@
 //! iterations.
 
 use super::{
-    Certificate, Entity, HEADING_COLOR, Item, LINE_RADIUS, LOOP_CLOSURE_COLOR, ODOMETRY_COLOR,
-    POINT_RADIUS, POSE_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
+    Certificate, Entity, HEADING_COLOR, Item, LANDMARK_COLOR, LANDMARK_RADIUS, LINE_RADIUS,
+    LOOP_CLOSURE_COLOR, OBSERVATION_COLOR, OBSERVATION_RADIUS, ODOMETRY_COLOR, POINT_RADIUS,
+    POSE_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
 };
 use crate::graph::PoseGraph;
 
@@ -115,17 +116,151 @@ pub fn graph_entities(root: &str, graph: &PoseGraph) -> Vec<Entity> {
             ),
         );
     }
+    entities.extend(landmark_entities(root, graph));
     entities
+}
+
+/// The landmarks of a graph under `root` (none without landmarks): `landmarks` as points of
+/// their own color, `observations` as thin rays from each observing pose to the landmark.
+pub fn landmark_entities(root: &str, graph: &PoseGraph) -> Vec<Entity> {
+    let marks = &graph.landmarks;
+    if marks.is_empty() {
+        return Vec::new();
+    }
+    let positions = marks.positions.iter().map(|&[x, y]| point(x, y)).collect();
+    let rays = marks
+        .observations
+        .iter()
+        .map(|o| {
+            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
+            [point(a.x, a.y), point(x, y)]
+        })
+        .collect();
+    vec![
+        Entity::fixed(
+            format!("{root}/landmarks"),
+            Item::Points {
+                positions,
+                color: LANDMARK_COLOR,
+                radius: LANDMARK_RADIUS,
+            },
+        )
+        .with(
+            "landmark_id",
+            marks.ids.iter().map(|&id| f64::from(id)).collect(),
+        )
+        .with("x", marks.positions.iter().map(|p| p[0]).collect())
+        .with("y", marks.positions.iter().map(|p| p[1]).collect()),
+        Entity::fixed(
+            format!("{root}/observations"),
+            Item::Strips {
+                strips: rays,
+                colors: vec![OBSERVATION_COLOR],
+                radius: OBSERVATION_RADIUS,
+            },
+        )
+        .with(
+            "pose",
+            marks
+                .observations
+                .iter()
+                .map(|o| f64::from(graph.ids[o.pose]))
+                .collect(),
+        )
+        .with(
+            "landmark",
+            marks
+                .observations
+                .iter()
+                .map(|o| f64::from(marks.ids[o.landmark]))
+                .collect(),
+        ),
+    ]
+}
+
+/// The observation rays colored by their terms ν |l_k − p_i − r_i d_ik|² of the cost (the
+/// weights after the edges' in `weights`), on the scale of [`residual_entity`].
+pub fn landmark_residual_entity(
+    path: &str,
+    graph: &PoseGraph,
+    weights: &[crate::problem::weights::EdgeWeight],
+) -> Entity {
+    let marks = &graph.landmarks;
+    let residuals: Vec<f64> = marks
+        .observations
+        .iter()
+        .zip(&weights[graph.edges.len()..])
+        .map(|(o, w)| {
+            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
+            let (s, c) = a.theta.sin_cos();
+            let ex = x - a.x - (c * o.d[0] - s * o.d[1]);
+            let ey = y - a.y - (s * o.d[0] + c * o.d[1]);
+            w.tau * (ex * ex + ey * ey)
+        })
+        .collect();
+    let max = residuals.iter().copied().fold(0.0, f64::max);
+    let min_positive = residuals
+        .iter()
+        .copied()
+        .filter(|r| *r > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let colors = residuals
+        .iter()
+        .map(|&r| scale_color(residual_position(r, min_positive, max)))
+        .collect();
+    let strips = marks
+        .observations
+        .iter()
+        .map(|o| {
+            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
+            [point(a.x, a.y), point(x, y)]
+        })
+        .collect();
+    Entity::fixed(
+        path,
+        Item::Strips {
+            strips,
+            colors,
+            radius: RESIDUAL_LINE_RADIUS,
+        },
+    )
+    .with(
+        "pose",
+        marks
+            .observations
+            .iter()
+            .map(|o| f64::from(graph.ids[o.pose]))
+            .collect(),
+    )
+    .with(
+        "landmark",
+        marks
+            .observations
+            .iter()
+            .map(|o| f64::from(marks.ids[o.landmark]))
+            .collect(),
+    )
+    .with("residual", residuals)
 }
 
 /// "N poses, M edges (K odometry, L loop closures)".
 pub fn graph_summary(graph: &PoseGraph) -> String {
     let odometry = graph.edges.iter().filter(|e| is_odometry(graph, e)).count();
+    let marks = &graph.landmarks;
     format!(
-        "{} poses, {} edges ({odometry} odometry, {} loop closures)",
+        "{} poses, {} edges ({odometry} odometry, {} loop closures){}",
         graph.num_poses(),
         graph.edges.len(),
-        graph.edges.len() - odometry
+        graph.edges.len() - odometry,
+        if marks.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", {} landmarks, {} observations",
+                marks.len(),
+                marks.observations.len()
+            )
+        }
     )
 }
 

@@ -60,6 +60,9 @@ pub const POSE_COLOR: Rgb = [200, 200, 200];
 pub const HEADING_COLOR: Rgb = [120, 210, 120];
 pub const ODOMETRY_COLOR: Rgb = [90, 150, 240];
 pub const LOOP_CLOSURE_COLOR: Rgb = [250, 140, 40];
+/// Landmarks (issue 13) and the rays of their observations.
+pub const LANDMARK_COLOR: Rgb = [225, 70, 200];
+pub const OBSERVATION_COLOR: Rgb = [150, 150, 150];
 
 /// The residual color scale, from the smallest term (first) to the largest (last).
 pub const RESIDUAL_SCALE: [Rgb; 5] = [
@@ -74,6 +77,10 @@ pub const RESIDUAL_SCALE: [Rgb; 5] = [
 const POINT_RADIUS: f32 = 1.0;
 const LINE_RADIUS: f32 = 0.75;
 const RESIDUAL_LINE_RADIUS: f32 = 1.25;
+/// Observation rays: thinner than the edges, so that a landmark seen from many poses does not
+/// hide the trajectory.
+const OBSERVATION_RADIUS: f32 = 0.35;
+const LANDMARK_RADIUS: f32 = 2.0;
 
 /// The data of one entity, independent of rerun.
 #[derive(Debug, Clone, PartialEq)]
@@ -226,6 +233,13 @@ impl Recorder {
             let mut v = graph_entities("optimized", graph);
             if let Ok(weights) = edge_weights(graph, policy) {
                 v.push(residual_entity("optimized/residuals", graph, &weights));
+                if !graph.landmarks.is_empty() {
+                    v.push(landmark_residual_entity(
+                        "optimized/landmark_residuals",
+                        graph,
+                        &weights,
+                    ));
+                }
             }
             v
         });
@@ -305,6 +319,7 @@ mod tests {
             fixed: Vec::new(),
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Default::default(),
         }
     }
 
@@ -344,6 +359,77 @@ mod tests {
             graph_summary(&g),
             "4 poses, 4 edges (3 odometry, 1 loop closures)"
         );
+    }
+
+    #[test]
+    fn landmarks_are_points_and_rays_and_their_residuals_terms_of_the_cost() {
+        use crate::graph::{LandmarkForm, Landmarks, Observation, SymMat2};
+        let mut g = square();
+        g.landmarks = Landmarks {
+            ids: vec![10, 11],
+            positions: vec![[0.5, 0.5], [2.0, 0.0]],
+            observations: vec![
+                // Pose 0 (identity) sees landmark 10 at (0.5, 0.5): residual 0.
+                Observation {
+                    pose: 0,
+                    landmark: 0,
+                    d: [0.5, 0.5],
+                    information: SymMat2::IDENTITY,
+                },
+                // Pose 1 sees landmark 11 off by (0, 1) in its frame: residual ν·1 = 1.
+                Observation {
+                    pose: 1,
+                    landmark: 1,
+                    d: [1.0, 1.0],
+                    information: SymMat2::IDENTITY,
+                },
+            ],
+            declared: true,
+            form: LandmarkForm::G2o,
+        };
+        g.poses[1] = crate::graph::Pose2::new(1.0, 0.0, 0.0);
+        let v = graph_entities("graph", &g);
+        let landmarks = v.iter().find(|e| e.path == "graph/landmarks").unwrap();
+        let Item::Points {
+            positions, color, ..
+        } = &landmarks.item
+        else {
+            panic!("not points")
+        };
+        assert_eq!((positions.len(), *color), (2, LANDMARK_COLOR));
+        let rays = v.iter().find(|e| e.path == "graph/observations").unwrap();
+        let Item::Strips { strips, .. } = &rays.item else {
+            panic!("not strips")
+        };
+        assert_eq!(strips[1], [[1.0, 0.0], [2.0, 0.0]]);
+        let w = edge_weights(&g, Weights::Unit).unwrap();
+        let e = landmark_residual_entity("optimized/landmark_residuals", &g, &w);
+        let residual = &e.values.iter().find(|(n, _)| *n == "residual").unwrap().1;
+        assert_eq!(residual, &vec![0.0, 1.0]);
+        // Edge terms plus observation terms are the cost.
+        let edges = residual_entity("optimized/residuals", &g, &w);
+        let edge_total: f64 = edges
+            .values
+            .iter()
+            .find(|(n, _)| *n == "residual")
+            .unwrap()
+            .1
+            .iter()
+            .sum();
+        let x: Vec<crate::graph::Pose2> = g
+            .poses
+            .iter()
+            .copied()
+            .chain(
+                g.landmarks
+                    .positions
+                    .iter()
+                    .map(|&[x, y]| crate::graph::Pose2::new(x, y, 0.0)),
+            )
+            .collect();
+        let total = edge_total + residual.iter().sum::<f64>();
+        assert!((total - crate::problem::matrix::cost(&g, &w, &x)).abs() < 1e-12);
+        assert!(graph_summary(&g).ends_with(", 2 landmarks, 2 observations"));
     }
 
     #[test]

@@ -502,3 +502,40 @@ def test_rejects_landmark_and_3d_files(name, input_path, run_pgo, tmp_path):
     assert re.search(rf"^{re.escape(str(src))}:\d+:\d+: \S", proc.stderr, re.MULTILINE), (
         f"no PATH:LINE:COL: message on stderr:\n{proc.stderr}"
     )
+
+
+def test_g2o_reads_pgo_landmark_output(run_pgo, datasets_dir, tmp_path):
+    """g2o (g2opy, types_slam2d) loads pgo's landmark file (cityTrees10000 converted to g2o's
+    VERTEX_XY/EDGE_SE2_XY form) with every landmark position, measurement and 2x2 information
+    equal to pgo's text, and the same edge count (issue 13)."""
+    out = tmp_path / "trees.g2o"
+    run_pgo([datasets_dir / "cityTrees10000.g2o", "--landmarks", "g2o", "-o", out])
+    points, observations = {}, []
+    for line in out.read_text(encoding="ascii").splitlines():
+        t = line.split()
+        if t and t[0] == "VERTEX_XY":
+            points[int(t[1])] = (float(t[2]), float(t[3]))
+        elif t and t[0] == "EDGE_SE2_XY":
+            observations.append((int(t[1]), int(t[2]), tuple(float(v) for v in t[3:8])))
+    assert len(points) == 100 and len(observations) == 4443
+    opt = load_g2opy(out)
+    mm = Mismatches(f"g2opy load({out.name}) vs pgo landmarks")
+    verts = opt.vertices()
+    for vid, xy in points.items():
+        v = verts.get(vid)
+        if not isinstance(v, g2opy.VertexPointXY):
+            mm.add(f"vertex {vid}: {type(v).__name__}, expected VertexPointXY")
+            continue
+        mm.check_equal(f"landmark {vid}", tuple(float(c) for c in v.estimate()), xy)
+    got = [e for e in g2opy_edges_in_file_order(opt) if isinstance(e, g2opy.EdgeSE2PointXY)]
+    mm.check_equal("observation count", len(got), len(observations))
+    for n, (e, (i, k, values)) in enumerate(zip(got, observations)):
+        mm.check_equal(f"observation #{n} endpoints", [v.id() for v in e.vertices()], [i, k])
+        m = e.information()
+        z = tuple(float(c) for c in e.measurement())
+        mm.check_equal(
+            f"observation #{n} values",
+            z + (float(m[0, 0]), float(m[0, 1]), float(m[1, 1])),
+            values,
+        )
+    mm.assert_none()

@@ -56,9 +56,33 @@ pub enum ParseErrorKind {
     #[error("3D pose graphs are not supported (tag {tag}): pgo handles planar SE(2) graphs")]
     ThreeD { tag: String },
     #[error(
-        "landmarks are not supported (tag {tag}): pgo optimizes pose graphs (poses and pose-pose edges) only"
+        "this landmark type is not supported (tag {tag}): pgo reads landmarks as g2o's VERTEX_XY and EDGE_SE2_XY (position observations) and CPL-SLAM's LANDMARK2"
     )]
     Landmark { tag: String },
+    #[error(
+        "landmark lines of both forms in one file ({first} at line {first_line}, {tag} here): g2o's VERTEX_XY/EDGE_SE2_XY share the poses' id space, CPL-SLAM's LANDMARK2/POINT2 have their own; convert one of them with pgo-convert --landmarks"
+    )]
+    MixedLandmarkForms {
+        first: String,
+        first_line: usize,
+        tag: String,
+    },
+    #[error("vertex {id} is a landmark, where a pose is expected")]
+    NotAPose { id: u32 },
+    #[error("vertex {id} is a pose, where a landmark is expected")]
+    NotALandmark { id: u32 },
+    #[error("{tag} refers to landmark {id}, which no {vertex} line declares")]
+    UndeclaredLandmark {
+        tag: &'static str,
+        id: u32,
+        vertex: &'static str,
+    },
+    #[error("FIX names landmark {id}: pgo fixes poses only (the gauge is a pose's)")]
+    FixedLandmark { id: u32 },
+    #[error(
+        "the landmark information matrix (I11 I12 I22) is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass --allow-indefinite to accept it"
+    )]
+    LandmarkNotPositiveDefinite { pivot: usize },
     #[error(
         "unary priors are not supported (tag {tag}): pgo fixes the gauge itself; FIX lines are kept"
     )]

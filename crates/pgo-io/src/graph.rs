@@ -142,6 +142,100 @@ pub struct Edge {
     pub noise: SymMat3,
 }
 
+/// A symmetric 2x2 information matrix over (x, y) of a landmark observation, stored as its
+/// upper triangle `[I11, I12, I22]`, the order of `EDGE_SE2_XY` and `LANDMARK2` lines
+/// (docs/formats.md §2.1, §9.1). Landmark observations always hold information matrices,
+/// whatever the dialect of the pose edges.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymMat2(pub [f64; 3]);
+
+impl SymMat2 {
+    pub const IDENTITY: SymMat2 = SymMat2([1.0, 0.0, 1.0]);
+
+    /// Positive definiteness by Cholesky factorization; `Err(k)` names the first (0-based)
+    /// pivot that is not positive (or not finite).
+    pub fn check_positive_definite(self) -> Result<(), usize> {
+        let positive =
+            |d: f64| d.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater) && d.is_finite();
+        let [a, b, d] = self.0;
+        if !positive(a) {
+            return Err(0);
+        }
+        let l = b / a.sqrt();
+        if !positive(d - l * l) {
+            return Err(1);
+        }
+        Ok(())
+    }
+}
+
+/// An observation of landmark `landmark` from pose `pose` (dense indices into
+/// [`Landmarks::ids`] and [`PoseGraph::ids`]): `d` = (dx, dy) is the landmark's position in the
+/// frame of the pose, d ≈ R(θ_i)ᵀ (l − p_i); in complex notation d_ik = dx + i·dy and the term
+/// of f is ν |l_k − p_i − r_i d_ik|².
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    pub pose: usize,
+    pub landmark: usize,
+    pub d: [f64; 2],
+    /// Information matrix Ω_ik of (dx, dy).
+    pub information: SymMat2,
+}
+
+/// How landmarks are written in a file (docs/formats.md §2.1, §9.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum LandmarkForm {
+    /// g2o's types: `VERTEX_XY id x y`, `EDGE_SE2_XY pose point dx dy I11 I12 I22`; landmark
+    /// ids share one id space with the poses.
+    #[default]
+    G2o,
+    /// CPL-SLAM's `LANDMARK2 pose landmark dx dy I11 I12 I22` (positions, if any, on
+    /// `POINT2 id x y` lines, which CPL-SLAM skips); landmark ids live in their own id space.
+    Landmark2,
+}
+
+/// The landmarks of a graph: 2D points observed from poses. Empty for a pose graph.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Landmarks {
+    /// File ids, strictly ascending (in the poses' id space for [`LandmarkForm::G2o`], disjoint
+    /// from the pose ids; in their own for [`LandmarkForm::Landmark2`]).
+    pub ids: Vec<VertexId>,
+    /// Position of each landmark: from vertex lines, or from its first observation by a pose
+    /// when the file has none ([`PoseGraph::initialize_spanning_tree`]).
+    pub positions: Vec<[f64; 2]>,
+    /// Observations in input order.
+    pub observations: Vec<Observation>,
+    /// Whether `positions` came from landmark vertex lines in the file.
+    pub declared: bool,
+    pub form: LandmarkForm,
+}
+
+impl Landmarks {
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Dense index of a landmark's file id.
+    pub fn index_of(&self, id: VertexId) -> Option<usize> {
+        self.ids.binary_search(&id).ok()
+    }
+
+    /// The number of observations of each landmark.
+    pub fn observation_counts(&self) -> Vec<usize> {
+        let mut count = vec![0usize; self.ids.len()];
+        for o in &self.observations {
+            count[o.landmark] += 1;
+        }
+        count
+    }
+}
+
 /// A planar pose graph.
 ///
 /// Poses are indexed densely `0..n` in ascending id order (`ids[k]` is the file's id of pose
@@ -160,6 +254,8 @@ pub struct PoseGraph {
     pub vertices_declared: bool,
     /// Whether edge noise blocks are information or covariance matrices.
     pub noise: NoiseKind,
+    /// Landmarks and their observations (empty for a pose graph).
+    pub landmarks: Landmarks,
 }
 
 impl PoseGraph {
@@ -173,6 +269,7 @@ impl PoseGraph {
             fixed: Vec::new(),
             vertices_declared: true,
             noise: NoiseKind::Information,
+            landmarks: Landmarks::default(),
         }
     }
 
@@ -211,42 +308,170 @@ impl PoseGraph {
         Ok(())
     }
 
-    /// Renumbers the ids densely as `0..n` in ascending order of the old ids.
+    /// Renumbers the ids densely as `0..n` in ascending order of the old ids; landmarks
+    /// follow as `n..n + m` in the g2o form (one id space), `0..m` in the LANDMARK2 form.
     pub fn reindex(&mut self) {
         for (k, id) in self.ids.iter_mut().enumerate() {
             *id = k as VertexId;
         }
+        let base = match self.landmarks.form {
+            LandmarkForm::G2o => self.ids.len(),
+            LandmarkForm::Landmark2 => 0,
+        };
+        for (k, id) in self.landmarks.ids.iter_mut().enumerate() {
+            *id = (base + k) as VertexId;
+        }
     }
 
-    /// Adjacency in compressed form: for pose `k`, `adj[start[k]..start[k + 1]]` lists the edges
-    /// incident to it, in input order.
+    /// Puts the landmarks in g2o's form (one id space with the poses): landmark id `k` becomes
+    /// `k + offset`. The offset is `offset` if given, else 0 when no landmark id is a pose id
+    /// (CPL-SLAM's victoriaPark.g2o numbers both in one sequence), else the largest pose id + 1
+    /// (cityTrees10000.g2o's landmarks 0..99 share ids with poses 0..99). Returns the offset used;
+    /// [`PoseGraph::landmarks_to_landmark2`] with it gives back the ids. Already in g2o form:
+    /// nothing changes and the offset is 0. Errors if a shifted id would collide with a pose id
+    /// or exceed [`MAX_VERTEX_ID`].
+    pub fn landmarks_to_g2o(&mut self, offset: Option<VertexId>) -> Result<VertexId, String> {
+        if self.landmarks.form == LandmarkForm::G2o {
+            return match offset {
+                None | Some(0) => Ok(0),
+                Some(_) => Err("the landmarks are in g2o form already: no offset applies".into()),
+            };
+        }
+        let collides = |offset: VertexId| {
+            self.landmarks
+                .ids
+                .iter()
+                .find(|&&id| self.index_of(id + offset).is_some())
+                .copied()
+        };
+        let top = self.landmarks.ids.last().copied().unwrap_or(0);
+        let offset = match offset {
+            Some(o) => o,
+            None => match collides(0) {
+                None => 0,
+                Some(_) => self.ids.last().map_or(0, |&m| m + 1),
+            },
+        };
+        if u64::from(top) + u64::from(offset) > u64::from(MAX_VERTEX_ID) {
+            return Err(format!(
+                "landmark id {top} + offset {offset} exceeds the largest id {MAX_VERTEX_ID}"
+            ));
+        }
+        if let Some(id) = collides(offset) {
+            return Err(format!(
+                "landmark {id} + offset {offset} = {} is a pose id",
+                id + offset
+            ));
+        }
+        for id in &mut self.landmarks.ids {
+            *id += offset;
+        }
+        self.landmarks.form = LandmarkForm::G2o;
+        Ok(offset)
+    }
+
+    /// Puts the landmarks in CPL-SLAM's LANDMARK2 form (their own id space): landmark id `k`
+    /// becomes `k − offset` (0 if not given), the inverse of [`PoseGraph::landmarks_to_g2o`].
+    /// Errors if some landmark id is below the offset.
+    pub fn landmarks_to_landmark2(&mut self, offset: Option<VertexId>) -> Result<(), String> {
+        let offset = offset.unwrap_or(0);
+        if self.landmarks.form == LandmarkForm::Landmark2 {
+            return match offset {
+                0 => Ok(()),
+                _ => Err("the landmarks are in LANDMARK2 form already: no offset applies".into()),
+            };
+        }
+        if let Some(&low) = self.landmarks.ids.first()
+            && low < offset
+        {
+            return Err(format!("landmark {low} is below the offset {offset}"));
+        }
+        for id in &mut self.landmarks.ids {
+            *id -= offset;
+        }
+        self.landmarks.form = LandmarkForm::Landmark2;
+        Ok(())
+    }
+
+    /// Adjacency in compressed form over the nodes `0..n` (poses) and `n..n + m` (landmarks):
+    /// for node `u`, `adj[start[u]..start[u + 1]]` lists its links, edge `k` as `k` and
+    /// observation `k` as `edges.len() + k`, edges first, each in input order.
     pub fn incidence(&self) -> (Vec<usize>, Vec<usize>) {
         let n = self.num_poses();
-        let mut start = vec![0usize; n + 1];
+        let nodes = n + self.landmarks.len();
+        let mut start = vec![0usize; nodes + 1];
         for e in &self.edges {
             start[e.i + 1] += 1;
             start[e.j + 1] += 1;
         }
-        for k in 0..n {
+        for o in &self.landmarks.observations {
+            start[o.pose + 1] += 1;
+            start[n + o.landmark + 1] += 1;
+        }
+        for k in 0..nodes {
             start[k + 1] += start[k];
         }
         let mut fill = start.clone();
-        let mut adj = vec![0usize; start[n]];
+        let mut adj = vec![0usize; start[nodes]];
         for (k, e) in self.edges.iter().enumerate() {
             adj[fill[e.i]] = k;
             fill[e.i] += 1;
             adj[fill[e.j]] = k;
             fill[e.j] += 1;
         }
+        let m = self.edges.len();
+        for (k, o) in self.landmarks.observations.iter().enumerate() {
+            adj[fill[o.pose]] = m + k;
+            fill[o.pose] += 1;
+            adj[fill[n + o.landmark]] = m + k;
+            fill[n + o.landmark] += 1;
+        }
         (start, adj)
     }
 
-    /// Connected components: the component label of every pose, labels numbered in order of
-    /// each component's smallest id, and the number of components.
+    /// The node at the other end of link `k` (see [`PoseGraph::incidence`]) from node `u`.
+    fn other_end(&self, k: usize, u: usize) -> usize {
+        match self.edges.get(k) {
+            Some(e) => {
+                if e.i == u {
+                    e.j
+                } else {
+                    e.i
+                }
+            }
+            None => {
+                let o = &self.landmarks.observations[k - self.edges.len()];
+                let l = self.num_poses() + o.landmark;
+                if u == l { o.pose } else { l }
+            }
+        }
+    }
+
+    /// Connected components through edges and landmark observations (two poses that observe
+    /// one landmark are connected): the component label of every pose, labels numbered in
+    /// order of each component's smallest id, and the number of components. Landmarks seen by
+    /// no pose belong to no component ([`PoseGraph::landmark_components`]).
     pub fn connected_components(&self) -> (Vec<usize>, usize) {
+        let (mut label, count) = self.node_components();
+        label.truncate(self.num_poses());
+        (label, count)
+    }
+
+    /// The component label of every landmark (as [`PoseGraph::connected_components`] numbers
+    /// them), `None` for a landmark seen by no pose.
+    pub fn landmark_components(&self) -> Vec<Option<usize>> {
+        let (label, _) = self.node_components();
+        label[self.num_poses()..]
+            .iter()
+            .map(|&c| (c != usize::MAX).then_some(c))
+            .collect()
+    }
+
+    /// Labels of all nodes (poses, then landmarks; `usize::MAX` for unobserved landmarks).
+    fn node_components(&self) -> (Vec<usize>, usize) {
         let (start, adj) = self.incidence();
         let n = self.num_poses();
-        let mut label = vec![usize::MAX; n];
+        let mut label = vec![usize::MAX; n + self.landmarks.len()];
         let mut count = 0;
         let mut stack = Vec::new();
         for root in 0..n {
@@ -257,8 +482,7 @@ impl PoseGraph {
             stack.push(root);
             while let Some(u) = stack.pop() {
                 for &k in &adj[start[u]..start[u + 1]] {
-                    let e = &self.edges[k];
-                    let v = if e.i == u { e.j } else { e.i };
+                    let v = self.other_end(k, u);
                     if label[v] == usize::MAX {
                         label[v] = count;
                         stack.push(v);
@@ -273,18 +497,32 @@ impl PoseGraph {
     /// The connected components as separate graphs (the paper's remark after Assumption 1: a
     /// graph with k components is k independent problems), with, for each, the dense indices
     /// of its poses in `self` (ascending) and of its edges (input order). FIX ids go with their
-    /// component.
+    /// component, and so do the landmarks its poses observe (with their observations, in input
+    /// order); landmarks seen by no pose are in no component.
     pub fn components(&self) -> Vec<(PoseGraph, Vec<usize>, Vec<usize>)> {
-        let (label, count) = self.connected_components();
+        let (label, count) = self.node_components();
+        let n = self.num_poses();
         let mut poses: Vec<Vec<usize>> = vec![Vec::new(); count];
-        for (k, &c) in label.iter().enumerate() {
+        for (k, &c) in label[..n].iter().enumerate() {
             poses[c].push(k);
         }
-        let mut local = vec![0usize; self.num_poses()];
+        let mut local = vec![0usize; n];
         for members in &poses {
             for (a, &k) in members.iter().enumerate() {
                 local[k] = a;
             }
+        }
+        let mut landmarks: Vec<Vec<usize>> = vec![Vec::new(); count];
+        let mut local_landmark = vec![0usize; self.landmarks.len()];
+        for (k, &c) in label[n..].iter().enumerate() {
+            if c != usize::MAX {
+                local_landmark[k] = landmarks[c].len();
+                landmarks[c].push(k);
+            }
+        }
+        let mut observations: Vec<Vec<usize>> = vec![Vec::new(); count];
+        for (k, o) in self.landmarks.observations.iter().enumerate() {
+            observations[label[o.pose]].push(k);
         }
         let mut edges: Vec<Vec<usize>> = vec![Vec::new(); count];
         for (k, e) in self.edges.iter().enumerate() {
@@ -293,8 +531,9 @@ impl PoseGraph {
         poses
             .into_iter()
             .zip(edges)
+            .zip(landmarks.into_iter().zip(observations))
             .enumerate()
-            .map(|(c, (members, edge_ids))| {
+            .map(|(c, ((members, edge_ids), (marks, seen)))| {
                 let graph = PoseGraph {
                     ids: members.iter().map(|&k| self.ids[k]).collect(),
                     poses: members.iter().map(|&k| self.poses[k]).collect(),
@@ -317,16 +556,40 @@ impl PoseGraph {
                         .collect(),
                     vertices_declared: self.vertices_declared,
                     noise: self.noise,
+                    landmarks: Landmarks {
+                        ids: marks.iter().map(|&k| self.landmarks.ids[k]).collect(),
+                        positions: marks.iter().map(|&k| self.landmarks.positions[k]).collect(),
+                        observations: seen
+                            .iter()
+                            .map(|&k| {
+                                let o = self.landmarks.observations[k];
+                                Observation {
+                                    pose: local[o.pose],
+                                    landmark: local_landmark[o.landmark],
+                                    ..o
+                                }
+                            })
+                            .collect(),
+                        declared: self.landmarks.declared,
+                        form: self.landmarks.form,
+                    },
                 };
                 (graph, members, edge_ids)
             })
             .collect()
     }
 
-    /// Whether the graph is a forest: no cycles, parallel edges included (Prop. 1).
+    /// Whether the graph is a forest: no cycles, parallel edges included (Prop. 1), counting
+    /// landmarks as nodes and observations as links (a landmark seen twice closes a cycle).
     pub fn is_forest(&self) -> bool {
         let (_, count) = self.connected_components();
-        self.edges.len() + count == self.num_poses()
+        let observed = self
+            .landmarks
+            .observation_counts()
+            .iter()
+            .filter(|&&c| c > 0)
+            .count();
+        self.edges.len() + self.landmarks.observations.len() + count == self.num_poses() + observed
     }
 
     /// Whether the measurements compose to the identity along every cycle (Definition 1), to
@@ -341,6 +604,12 @@ impl PoseGraph {
                 .inv_mul(&tree.poses[e.j].to_isometry());
             let d = e.measurement.to_isometry().inv_mul(&rel);
             d.translation.vector.norm() <= tolerance && d.rotation.angle().abs() <= tolerance
+        }) && self.landmarks.observations.iter().all(|o| {
+            let [x, y] = tree.landmarks.positions[o.landmark];
+            let seen = tree.poses[o.pose]
+                .to_isometry()
+                .inverse_transform_point(&nalgebra::Point2::new(x, y));
+            (seen.coords - Vector2::new(o.d[0], o.d[1])).norm() <= tolerance
         })
     }
 
@@ -348,6 +617,9 @@ impl PoseGraph {
     /// composition h → l: the node removal of Sec. 6 (Fig. 8(b)-(f)), which keeps the error
     /// accumulated along every cycle. `None` unless `k` has exactly those two edges.
     pub fn eliminate_pose(&self, k: usize) -> Option<PoseGraph> {
+        if !self.landmarks.is_empty() {
+            return None;
+        }
         let incident: Vec<&Edge> = self.edges.iter().filter(|e| e.i == k || e.j == k).collect();
         let [into, out] = incident[..] else {
             return None;
@@ -398,17 +670,22 @@ impl PoseGraph {
                 .collect(),
             vertices_declared: self.vertices_declared,
             noise: self.noise,
+            landmarks: Landmarks::default(),
         })
     }
 
     /// Initial poses composed along a breadth-first spanning tree of each component, rooted at
     /// the component's smallest id (placed at the origin): x_j = x_i · z for an edge i -> j met
-    /// forwards, x_i = x_j · z⁻¹ met backwards. Neighbours are visited in edge input order, so the
-    /// result is deterministic.
+    /// forwards, x_i = x_j · z⁻¹ met backwards. Neighbours are visited in input order (edges,
+    /// then observations), so the result is deterministic. Landmarks are nodes of the tree too:
+    /// l = p_i + R(θ_i) d from the pose that reaches it first, and a pose reached only through
+    /// a landmark gets θ = 0 and p = l − d. Landmarks seen by no pose keep their positions.
     pub fn initialize_spanning_tree(&mut self) {
         let (start, adj) = self.incidence();
         let n = self.num_poses();
+        let m = self.edges.len();
         let mut pose: Vec<Option<Isometry2<f64>>> = vec![None; n];
+        let mut point: Vec<Option<Vector2<f64>>> = vec![None; self.landmarks.len()];
         let mut queue = std::collections::VecDeque::new();
         for root in 0..n {
             if pose[root].is_some() {
@@ -417,8 +694,29 @@ impl PoseGraph {
             pose[root] = Some(Isometry2::identity());
             queue.push_back(root);
             while let Some(u) = queue.pop_front() {
+                if u >= n {
+                    let l = point[u - n].expect("queued landmarks are set");
+                    for &k in &adj[start[u]..start[u + 1]] {
+                        let o = &self.landmarks.observations[k - m];
+                        if pose[o.pose].is_none() {
+                            let d = Vector2::new(o.d[0], o.d[1]);
+                            pose[o.pose] = Some(Isometry2::new(l - d, 0.0));
+                            queue.push_back(o.pose);
+                        }
+                    }
+                    continue;
+                }
                 let xu = pose[u].expect("queued poses are set");
                 for &k in &adj[start[u]..start[u + 1]] {
+                    if k >= m {
+                        let o = &self.landmarks.observations[k - m];
+                        if point[o.landmark].is_none() {
+                            let d = nalgebra::Point2::new(o.d[0], o.d[1]);
+                            point[o.landmark] = Some((xu * d).coords);
+                            queue.push_back(n + o.landmark);
+                        }
+                        continue;
+                    }
                     let e = &self.edges[k];
                     let z = e.measurement.to_isometry();
                     let (v, xv) = if e.i == u {
@@ -437,6 +735,25 @@ impl PoseGraph {
             .iter()
             .map(|p| Pose2::from_isometry(&p.expect("every pose is reached from its root")))
             .collect();
+        if !self.landmarks.declared {
+            for (at, p) in self.landmarks.positions.iter_mut().zip(point) {
+                if let Some(p) = p {
+                    *at = [p.x, p.y];
+                }
+            }
+        }
+    }
+
+    /// Landmark positions from the poses: l = p_i + R(θ_i) d from each landmark's first
+    /// observation in input order (landmarks seen by no pose keep theirs).
+    pub fn initialize_landmarks(&mut self) {
+        let mut done = vec![false; self.landmarks.len()];
+        for o in &self.landmarks.observations {
+            if !std::mem::replace(&mut done[o.landmark], true) {
+                let p = self.poses[o.pose].to_isometry() * nalgebra::Point2::new(o.d[0], o.d[1]);
+                self.landmarks.positions[o.landmark] = [p.x, p.y];
+            }
+        }
     }
 }
 
@@ -508,6 +825,7 @@ mod tests {
             fixed: vec![],
             vertices_declared: false,
             noise: NoiseKind::Information,
+            landmarks: Landmarks::default(),
         }
     }
 

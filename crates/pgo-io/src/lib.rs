@@ -18,7 +18,10 @@ pub mod io;
 pub mod stats;
 
 pub use error::{Error, Location, ParseError, ParseErrorKind, Result, Warning};
-pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};
+pub use graph::{
+    Edge, LandmarkForm, Landmarks, NoiseKind, Observation, Pose2, PoseGraph, SymMat2, SymMat3,
+    VertexId,
+};
 pub use io::{
     Dialect, Format, ReadOptions, ReadReport, WriteOptions, read, read_path, write, write_path,
 };

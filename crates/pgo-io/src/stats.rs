@@ -28,7 +28,7 @@ pub struct GraphStats {
     pub exact_duplicate_edges: usize,
     /// Connected components, isolated poses included.
     pub components: usize,
-    /// Poses without edges.
+    /// Poses without edges and without landmark observations.
     pub isolated_poses: usize,
     pub id_min: Option<VertexId>,
     pub id_max: Option<VertexId>,
@@ -36,6 +36,17 @@ pub struct GraphStats {
     pub id_gaps: u64,
     /// Ids on FIX lines.
     pub fixed: Vec<VertexId>,
+    /// Landmarks (declared by vertex lines, or mentioned by observations).
+    pub landmarks: usize,
+    /// How the file writes landmarks: `g2o` (`VERTEX_XY`, `EDGE_SE2_XY`, one id space) or
+    /// `landmark2` (CPL-SLAM's `LANDMARK2`, landmark ids of their own); `null` without landmarks.
+    pub landmark_form: Option<crate::graph::LandmarkForm>,
+    /// Landmark observation lines (`EDGE_SE2_XY` or `LANDMARK2`).
+    pub observations: usize,
+    /// Landmarks observed by exactly one pose line.
+    pub landmarks_seen_once: usize,
+    /// Landmarks no observation mentions (declared by a vertex line only).
+    pub landmarks_unseen: usize,
 }
 
 impl GraphStats {
@@ -55,8 +66,12 @@ impl GraphStats {
             degree[e.i] += 1;
             degree[e.j] += 1;
         }
+        for o in &graph.landmarks.observations {
+            degree[o.pose] += 1;
+        }
         let (duplicate, exact_duplicate) = duplicates(graph);
         let (_, components) = graph.connected_components();
+        let seen = graph.landmarks.observation_counts();
         let (id_min, id_max) = (ids.first().copied(), ids.last().copied());
         let id_gaps = match (id_min, id_max) {
             (Some(lo), Some(hi)) => u64::from(hi - lo) + 1 - ids.len() as u64,
@@ -80,6 +95,11 @@ impl GraphStats {
             id_max,
             id_gaps,
             fixed: graph.fixed.iter().map(|&k| ids[k]).collect(),
+            landmarks: graph.landmarks.len(),
+            landmark_form: (!graph.landmarks.is_empty()).then_some(graph.landmarks.form),
+            observations: graph.landmarks.observations.len(),
+            landmarks_seen_once: seen.iter().filter(|&&c| c == 1).count(),
+            landmarks_unseen: seen.iter().filter(|&&c| c == 0).count(),
         }
     }
 }

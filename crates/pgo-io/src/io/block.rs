@@ -6,7 +6,7 @@ use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, sp
 use super::options::ReadOptions;
 use super::{g2o, toro};
 use crate::error::{Location, ParseError, ParseErrorKind};
-use crate::graph::{Edge, Pose2, SymMat3, VertexId};
+use crate::graph::{Edge, LandmarkForm, Pose2, SymMat2, SymMat3, VertexId};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Family {
@@ -21,6 +21,8 @@ enum Tag {
     Equiv,
     ThreeD,
     Landmark,
+    LandmarkVertex(LandmarkForm),
+    Observation(LandmarkForm),
     Prior,
     Comment,
     Unknown,
@@ -38,6 +40,14 @@ fn classify(tag: &[u8]) -> Tag {
         Tag::Vertex(Family::Toro)
     } else if is(toro::EDGE_TAGS) {
         Tag::Edge(Family::Toro)
+    } else if tag == g2o::LANDMARK_EDGE.as_bytes() {
+        Tag::Observation(LandmarkForm::G2o)
+    } else if tag == g2o::LANDMARK2.as_bytes() {
+        Tag::Observation(LandmarkForm::Landmark2)
+    } else if tag == g2o::LANDMARK_VERTEX.as_bytes() {
+        Tag::LandmarkVertex(LandmarkForm::G2o)
+    } else if tag == g2o::POINT2.as_bytes() {
+        Tag::LandmarkVertex(LandmarkForm::Landmark2)
     } else if tag == g2o::FIX.as_bytes() {
         Tag::Fix
     } else if tag == toro::EQUIV.as_bytes() {
@@ -75,6 +85,32 @@ fn narrow(v: usize) -> u32 {
     u32::try_from(v).unwrap_or(u32::MAX)
 }
 
+/// A landmark vertex line as read (`VERTEX_XY` or `POINT2`).
+pub(super) struct RawLandmark {
+    pub(super) id: VertexId,
+    pub(super) line: u32,
+    pub(super) col: u32,
+    pub(super) position: [f64; 2],
+}
+
+/// A landmark observation line as read (`EDGE_SE2_XY` or `LANDMARK2`): file ids, values in
+/// file order, and where its fields are.
+pub(super) struct RawObservation {
+    pub(super) pose: VertexId,
+    pub(super) landmark: VertexId,
+    pub(super) d: [f64; 2],
+    pub(super) information: SymMat2,
+    pub(super) site: EdgeSite,
+}
+
+/// Where the first line of a landmark form is (its tag's line and column, and spelling).
+#[derive(Debug, Clone)]
+pub(super) struct FormTag {
+    pub(super) line: usize,
+    pub(super) col: usize,
+    pub(super) tag: String,
+}
+
 pub(super) struct Skipped {
     pub(super) first_line: usize,
     pub(super) count: usize,
@@ -103,6 +139,12 @@ pub(super) struct Block {
     pub(super) first_vertex_family: Option<Family>,
     pub(super) unknown: Vec<(String, Skipped)>,
     pub(super) equiv: Option<Skipped>,
+    pub(super) landmarks: Vec<RawLandmark>,
+    pub(super) observations: Vec<RawObservation>,
+    /// The first landmark line of each form: g2o's (`VERTEX_XY`, `EDGE_SE2_XY`) and CPL-SLAM's
+    /// (`LANDMARK2`, `POINT2`).
+    pub(super) first_g2o_landmark: Option<FormTag>,
+    pub(super) first_landmark2: Option<FormTag>,
 }
 
 /// Parses the lines of one block.
@@ -278,6 +320,8 @@ impl BlockParser<'_> {
             }
             Tag::ThreeD => Err(at_tag(ParseErrorKind::ThreeD { tag: tag_name() })),
             Tag::Landmark => Err(at_tag(ParseErrorKind::Landmark { tag: tag_name() })),
+            Tag::LandmarkVertex(form) => self.landmark_vertex(line_no, line, fields, form),
+            Tag::Observation(form) => self.observation(line_no, line, fields, form),
             Tag::Prior => Err(at_tag(ParseErrorKind::Prior { tag: tag_name() })),
             Tag::Unknown => {
                 let name = tag_name();
@@ -448,6 +492,77 @@ impl BlockParser<'_> {
             noise: SymMat3([v[3], v[4], v[5], v[6], v[7], v[8]]),
         });
         self.block.sites.push(site);
+        Ok(())
+    }
+
+    fn note_form(&mut self, form: LandmarkForm, line_no: usize, tag: &Field) {
+        let slot = match form {
+            LandmarkForm::G2o => &mut self.block.first_g2o_landmark,
+            LandmarkForm::Landmark2 => &mut self.block.first_landmark2,
+        };
+        slot.get_or_insert_with(|| FormTag {
+            line: line_no,
+            col: tag.col,
+            tag: tag.lossy(),
+        });
+    }
+
+    fn landmark_vertex(
+        &mut self,
+        line_no: usize,
+        line: &[u8],
+        fields: &[Field],
+        form: LandmarkForm,
+    ) -> Result<(), ParseError> {
+        let a = self.expect_fields(line_no, line, fields, 3, "id x y")?;
+        let id = self.id(line_no, &a[0])?;
+        let x = self.num(line_no, &a[1])?;
+        let y = self.num(line_no, &a[2])?;
+        self.note_form(form, line_no, &fields[0]);
+        self.block.landmarks.push(RawLandmark {
+            id,
+            line: narrow(line_no),
+            col: narrow(a[0].col),
+            position: [x, y],
+        });
+        Ok(())
+    }
+
+    fn observation(
+        &mut self,
+        line_no: usize,
+        line: &[u8],
+        fields: &[Field],
+        form: LandmarkForm,
+    ) -> Result<(), ParseError> {
+        let layout = match form {
+            LandmarkForm::G2o => "pose point dx dy I11 I12 I22",
+            LandmarkForm::Landmark2 => "pose landmark dx dy I11 I12 I22",
+        };
+        let a = self.expect_fields(line_no, line, fields, 7, layout)?;
+        let pose = self.id(line_no, &a[0])?;
+        let landmark = self.id(line_no, &a[1])?;
+        let mut v = [0.0; 5];
+        for (x, f) in v.iter_mut().zip(&a[2..]) {
+            *x = self.num(line_no, f)?;
+        }
+        if form == LandmarkForm::G2o && pose == landmark {
+            let kind = ParseErrorKind::SelfLoop { id: pose };
+            return Err(self.error(line_no, a[1].col, kind));
+        }
+        self.note_form(form, line_no, &fields[0]);
+        self.block.observations.push(RawObservation {
+            pose,
+            landmark,
+            d: [v[0], v[1]],
+            information: SymMat2([v[2], v[3], v[4]]),
+            site: EdgeSite {
+                line: narrow(line_no),
+                col_i: narrow(a[0].col),
+                col_j: narrow(a[1].col),
+                col_noise: narrow(a[4].col),
+            },
+        });
         Ok(())
     }
 

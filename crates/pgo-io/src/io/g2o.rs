@@ -24,10 +24,20 @@ pub const THREE_D: &[&str] = &[
     "EDGE_POINTXYZ_PRIOR",
 ];
 
-/// g2o tags of 2D landmark types (docs/formats.md §2.1).
+/// g2o's 2D landmark vertex: `VERTEX_XY id x y` (docs/formats.md §2.1).
+pub const LANDMARK_VERTEX: &str = "VERTEX_XY";
+/// g2o's pose-landmark edge: `EDGE_SE2_XY pose point dx dy I11 I12 I22` (docs/formats.md §2.1).
+pub const LANDMARK_EDGE: &str = "EDGE_SE2_XY";
+/// CPL-SLAM's pose-landmark edge, landmark ids in their own id space (docs/formats.md §9.1):
+/// `LANDMARK2 pose landmark dx dy I11 I12 I22`.
+pub const LANDMARK2: &str = "LANDMARK2";
+/// Landmark positions beside `LANDMARK2` lines: `POINT2 id x y`, pgo's layout (CPL-SLAM's reader
+/// skips `POINT2` lines, docs/formats.md §9.1), so that written estimates carry the positions.
+pub const POINT2: &str = "POINT2";
+
+/// g2o tags of the other 2D landmark types (docs/formats.md §2.1), rejected with a specific
+/// message.
 pub const LANDMARK: &[&str] = &[
-    "VERTEX_XY",
-    "EDGE_SE2_XY",
     "EDGE_SE2_POINTXY",
     "EDGE_POINTXY",
     "EDGE_PRIOR_XY",

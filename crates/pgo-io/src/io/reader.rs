@@ -6,7 +6,9 @@ use super::block::{Block, EdgeTag, Family, make_error, mixed_tags, parse_block};
 use super::options::ReadOptions;
 use super::{Dialect, Format};
 use crate::error::{Location, ParseError, ParseErrorKind, Warning};
-use crate::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
+use crate::graph::{
+    Edge, LandmarkForm, Landmarks, Observation, Pose2, PoseGraph, SymMat3, VertexId,
+};
 use std::collections::HashMap;
 use std::io::Read;
 
@@ -212,6 +214,14 @@ impl<'o> Reader<'o> {
         extend(&mut acc.edges, b.edges);
         extend(&mut acc.sites, b.sites);
         extend(&mut acc.fixed, b.fixed);
+        extend(&mut acc.landmarks, b.landmarks);
+        extend(&mut acc.observations, b.observations);
+        if acc.first_g2o_landmark.is_none() {
+            acc.first_g2o_landmark = b.first_g2o_landmark;
+        }
+        if acc.first_landmark2.is_none() {
+            acc.first_landmark2 = b.first_landmark2;
+        }
         if acc.first_edge_tag.is_none() {
             acc.first_edge_tag = b.first_edge_tag;
         }
@@ -233,14 +243,28 @@ impl<'o> Reader<'o> {
     }
 
     fn finish(mut self) -> Result<(PoseGraph, ReadReport), ParseError> {
-        if self.acc.vertices.is_empty() && self.acc.edges.is_empty() {
+        if self.acc.vertices.is_empty()
+            && self.acc.edges.is_empty()
+            && self.acc.observations.is_empty()
+            && self.acc.landmarks.is_empty()
+        {
             return Err(self.no_graph());
         }
         let (format, format_reason) = self.decide_format();
         let mut warnings = Vec::new();
         let declared = !self.acc.vertices.is_empty();
+        let form = self.landmark_form()?;
         let (ids, poses) = self.vertex_table()?;
         let index = IdIndex::new(&ids);
+        let (landmark_ids, positions) = self.landmark_table()?;
+        let landmark_index = IdIndex::new(&landmark_ids);
+        // In g2o's form one id space holds poses and landmarks: an id is one or the other.
+        let shared = form == LandmarkForm::G2o && !landmark_ids.is_empty();
+        if shared {
+            self.check_disjoint()?;
+            self.check_kinds()?;
+        }
+        let observations = self.resolve_observations(form, &index, &landmark_index)?;
 
         let (dialect, dialect_reason) = self.decide_dialect(format, &mut warnings);
         let mut edges = std::mem::take(&mut self.acc.edges);
@@ -265,6 +289,9 @@ impl<'o> Reader<'o> {
         let mut fixed = Vec::with_capacity(self.acc.fixed.len());
         let mut is_fixed = vec![false; ids.len()];
         for &(id, line, col) in &self.acc.fixed {
+            if shared && landmark_index.get(id).is_some() && index.get(id).is_none() {
+                return Err(self.error(line, col, ParseErrorKind::FixedLandmark { id }));
+            }
             let k = index
                 .get(id)
                 .ok_or_else(|| self.error(line, col, ParseErrorKind::UnknownFixed { id }))?;
@@ -275,6 +302,15 @@ impl<'o> Reader<'o> {
 
         if !self.options.allow_indefinite {
             self.check_positive_definite(&edges, dialect)?;
+            for (o, raw) in observations.iter().zip(&self.acc.observations) {
+                if let Err(pivot) = o.information.check_positive_definite() {
+                    return Err(self.error(
+                        raw.site.line as usize,
+                        raw.site.col_noise as usize,
+                        ParseErrorKind::LandmarkNotPositiveDefinite { pivot },
+                    ));
+                }
+            }
         }
 
         for (tag, s) in &self.acc.unknown {
@@ -297,6 +333,7 @@ impl<'o> Reader<'o> {
         }
         warnings.sort_by_key(|w| w.location.line);
 
+        let landmarks_declared = !self.acc.landmarks.is_empty();
         let mut graph = PoseGraph {
             ids,
             poses,
@@ -304,9 +341,18 @@ impl<'o> Reader<'o> {
             fixed,
             vertices_declared: declared,
             noise: dialect.noise(),
+            landmarks: Landmarks {
+                ids: landmark_ids,
+                positions,
+                observations,
+                declared: landmarks_declared,
+                form,
+            },
         };
         if !declared {
             graph.initialize_spanning_tree();
+        } else if !landmarks_declared {
+            graph.initialize_landmarks();
         }
         let report = ReadReport {
             format,
@@ -457,8 +503,183 @@ impl<'o> Reader<'o> {
         Ok(())
     }
 
-    /// Poses sorted by id, from the vertex lines, or the ids the edges mention (with identity
-    /// poses, to be composed along a spanning tree) when the file has no vertex lines.
+    /// The landmark form of the file: g2o's or CPL-SLAM's, never both.
+    fn landmark_form(&self) -> Result<LandmarkForm, ParseError> {
+        match (&self.acc.first_g2o_landmark, &self.acc.first_landmark2) {
+            (Some(a), Some(b)) => {
+                let (first, later) = if a.line <= b.line { (a, b) } else { (b, a) };
+                Err(self.error(
+                    later.line,
+                    later.col,
+                    ParseErrorKind::MixedLandmarkForms {
+                        first: first.tag.clone(),
+                        first_line: first.line,
+                        tag: later.tag.clone(),
+                    },
+                ))
+            }
+            (None, Some(_)) => Ok(LandmarkForm::Landmark2),
+            _ => Ok(LandmarkForm::G2o),
+        }
+    }
+
+    /// Landmarks sorted by id, from their vertex lines, or the ids the observations mention
+    /// (positions set later from the poses) when the file has none.
+    fn landmark_table(&self) -> Result<(Vec<VertexId>, Vec<[f64; 2]>), ParseError> {
+        let v = &self.acc.landmarks;
+        if v.is_empty() {
+            let mut ids: Vec<VertexId> = self.acc.observations.iter().map(|o| o.landmark).collect();
+            ids.sort_unstable();
+            ids.dedup();
+            let positions = vec![[0.0; 2]; ids.len()];
+            return Ok((ids, positions));
+        }
+        let mut order: Vec<usize> = (0..v.len()).collect();
+        order.sort_by_key(|&k| v[k].id);
+        let duplicate = order
+            .windows(2)
+            .filter(|w| v[w[0]].id == v[w[1]].id)
+            .min_by_key(|w| w[1]);
+        if let Some(w) = duplicate {
+            let (first, second) = (&v[w[0]], &v[w[1]]);
+            return Err(self.error(
+                second.line as usize,
+                second.col as usize,
+                ParseErrorKind::DuplicateVertex {
+                    id: second.id,
+                    first_line: first.line as usize,
+                },
+            ));
+        }
+        Ok(order.iter().map(|&k| (v[k].id, v[k].position)).unzip())
+    }
+
+    /// In the g2o form, no id is declared both as a pose and as a landmark (g2o's rule,
+    /// docs/formats.md §2.3): the later declaration is reported.
+    fn check_disjoint(&self) -> Result<(), ParseError> {
+        if self.acc.vertices.is_empty() || self.acc.landmarks.is_empty() {
+            return Ok(());
+        }
+        let pose_lines: HashMap<VertexId, u32> =
+            self.acc.vertices.iter().map(|v| (v.id, v.line)).collect();
+        let clash = self
+            .acc
+            .landmarks
+            .iter()
+            .filter_map(|l| pose_lines.get(&l.id).map(|&p| (l, p)))
+            .min_by_key(|(l, p)| l.line.max(*p));
+        if let Some((l, p)) = clash {
+            let (line, col, first) = if l.line > p {
+                (l.line, l.col, p)
+            } else {
+                let v = self
+                    .acc
+                    .vertices
+                    .iter()
+                    .find(|v| v.id == l.id)
+                    .expect("the clash is a pose id");
+                (v.line, v.col, l.line)
+            };
+            return Err(self.error(
+                line as usize,
+                col as usize,
+                ParseErrorKind::DuplicateVertex {
+                    id: l.id,
+                    first_line: first as usize,
+                },
+            ));
+        }
+        Ok(())
+    }
+
+    /// In the g2o form, every id is used as one kind of vertex: the kind its vertex line declares,
+    /// else the kind of its first use; the first line (in file order) that uses an id as the
+    /// other kind is reported.
+    fn check_kinds(&self) -> Result<(), ParseError> {
+        let mut kind: HashMap<VertexId, bool> = HashMap::new();
+        for v in &self.acc.vertices {
+            kind.insert(v.id, true);
+        }
+        for l in &self.acc.landmarks {
+            kind.insert(l.id, false);
+        }
+        // (line, col, id, is a pose) of every reference, in file order.
+        let mut refs: Vec<(u32, u32, VertexId, bool)> =
+            Vec::with_capacity(2 * (self.acc.edges.len() + self.acc.observations.len()));
+        for (e, site) in self.acc.edges.iter().zip(&self.acc.sites) {
+            refs.push((site.line, site.col_i, e.i as VertexId, true));
+            refs.push((site.line, site.col_j, e.j as VertexId, true));
+        }
+        for o in &self.acc.observations {
+            refs.push((o.site.line, o.site.col_i, o.pose, true));
+            refs.push((o.site.line, o.site.col_j, o.landmark, false));
+        }
+        refs.sort_by_key(|r| (r.0, r.1));
+        for (line, col, id, pose) in refs {
+            match kind.get(&id) {
+                Some(&k) if k != pose => {
+                    let what = if pose {
+                        ParseErrorKind::NotAPose { id }
+                    } else {
+                        ParseErrorKind::NotALandmark { id }
+                    };
+                    return Err(self.error(line as usize, col as usize, what));
+                }
+                Some(_) => {}
+                None => {
+                    kind.insert(id, pose);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Observations with dense indices: the pose must be a pose (declared, if the file has pose
+    /// vertex lines), the landmark a landmark.
+    fn resolve_observations(
+        &self,
+        form: LandmarkForm,
+        index: &IdIndex,
+        landmark_index: &IdIndex,
+    ) -> Result<Vec<Observation>, ParseError> {
+        let (tag, vertex) = match form {
+            LandmarkForm::G2o => ("EDGE_SE2_XY", "VERTEX_XY"),
+            LandmarkForm::Landmark2 => ("LANDMARK2", "POINT2"),
+        };
+        self.acc
+            .observations
+            .iter()
+            .map(|o| {
+                let at = |col: u32, kind| self.error(o.site.line as usize, col as usize, kind);
+                let pose = index.get(o.pose).ok_or_else(|| {
+                    at(
+                        o.site.col_i,
+                        ParseErrorKind::UndeclaredVertex { id: o.pose },
+                    )
+                })?;
+                let landmark = landmark_index.get(o.landmark).ok_or_else(|| {
+                    at(
+                        o.site.col_j,
+                        ParseErrorKind::UndeclaredLandmark {
+                            tag,
+                            id: o.landmark,
+                            vertex,
+                        },
+                    )
+                })?;
+                Ok(Observation {
+                    pose,
+                    landmark,
+                    d: o.d,
+                    information: o.information,
+                })
+            })
+            .collect()
+    }
+
+    /// Poses sorted by id, from the vertex lines, or the ids the edges and landmark
+    /// observations mention (with identity poses, to be composed along a spanning tree) when the
+    /// file has no vertex lines.
     fn vertex_table(&self) -> Result<(Vec<VertexId>, Vec<Pose2>), ParseError> {
         if self.acc.vertices.is_empty() {
             let mut ids: Vec<VertexId> = self
@@ -466,6 +687,7 @@ impl<'o> Reader<'o> {
                 .edges
                 .iter()
                 .flat_map(|e| [e.i as VertexId, e.j as VertexId])
+                .chain(self.acc.observations.iter().map(|o| o.pose))
                 .collect();
             ids.sort_unstable();
             ids.dedup();

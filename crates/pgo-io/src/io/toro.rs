@@ -18,4 +18,5 @@ pub const EQUIV: &str = "EQUIV";
 /// 3D tags (docs/formats.md §3.4).
 pub const THREE_D: &[&str] = &["VERTEX3", "EDGE3"];
 /// Landmark tags of GTSAM's TORO-like files (docs/formats.md §5.2, §9.1).
-pub const LANDMARK: &[&str] = &["BR", "LANDMARK", "LANDMARK2", "VERTEX_POINT2"];
+/// (`LANDMARK2` is CPL-SLAM's landmark edge, read in [`super::g2o`].)
+pub const LANDMARK: &[&str] = &["BR", "LANDMARK", "VERTEX_POINT2"];

@@ -4,7 +4,7 @@
 
 use super::{Dialect, Format, g2o, toro};
 use crate::error::Error;
-use crate::graph::PoseGraph;
+use crate::graph::{LandmarkForm, PoseGraph};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -45,6 +45,16 @@ fn write_named<W: Write>(
         )));
     }
     check_finite(graph)?;
+    if options.format == Format::Toro && !graph.landmarks.is_empty() {
+        return Err(Error::Invalid(format!(
+            "TORO has no landmark type: this graph has {} landmarks; write it as g2o (VERTEX_XY, EDGE_SE2_XY) instead",
+            graph.landmarks.len()
+        )));
+    }
+    let (landmark_vertex, observation_tag) = match graph.landmarks.form {
+        LandmarkForm::G2o => (g2o::LANDMARK_VERTEX, g2o::LANDMARK_EDGE),
+        LandmarkForm::Landmark2 => (g2o::POINT2, g2o::LANDMARK2),
+    };
     let (vertex_tag, edge_tag) = match options.format {
         Format::G2o => (g2o::VERTEX, g2o::EDGE),
         Format::Toro => (toro::VERTEX, toro::EDGE),
@@ -69,6 +79,17 @@ fn write_named<W: Write>(
         buf.push(b'\n');
         put(&mut buf, &mut out)?;
     }
+    let marks = &graph.landmarks;
+    for (id, p) in marks.ids.iter().zip(&marks.positions) {
+        buf.extend_from_slice(landmark_vertex.as_bytes());
+        let _ = write!(buf, " {id}");
+        for &v in p {
+            buf.push(b' ');
+            format_f64(v, &mut buf);
+        }
+        buf.push(b'\n');
+        put(&mut buf, &mut out)?;
+    }
     for e in &graph.edges {
         buf.extend_from_slice(edge_tag.as_bytes());
         let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
@@ -78,6 +99,16 @@ fn write_named<W: Write>(
             e.noise.0
         };
         for v in e.measurement.values().into_iter().chain(noise) {
+            buf.push(b' ');
+            format_f64(v, &mut buf);
+        }
+        buf.push(b'\n');
+        put(&mut buf, &mut out)?;
+    }
+    for o in &marks.observations {
+        buf.extend_from_slice(observation_tag.as_bytes());
+        let _ = write!(buf, " {} {}", graph.ids[o.pose], marks.ids[o.landmark]);
+        for &v in o.d.iter().chain(&o.information.0) {
             buf.push(b' ');
             format_f64(v, &mut buf);
         }
@@ -116,6 +147,27 @@ fn check_finite(graph: &PoseGraph) -> crate::Result<()> {
         return Err(Error::Invalid(format!(
             "edge {} -> {} holds a value that is not finite and cannot be written",
             graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
+    let marks = &graph.landmarks;
+    if let Some(k) = marks
+        .positions
+        .iter()
+        .position(|p| !p.iter().all(|v| v.is_finite()))
+    {
+        return Err(Error::Invalid(format!(
+            "position of landmark {} is not finite and cannot be written",
+            marks.ids[k]
+        )));
+    }
+    if let Some(o) = marks
+        .observations
+        .iter()
+        .find(|o| !o.d.iter().chain(&o.information.0).all(|v| v.is_finite()))
+    {
+        return Err(Error::Invalid(format!(
+            "observation of landmark {} from pose {} holds a value that is not finite and cannot be written",
+            marks.ids[o.landmark], graph.ids[o.pose]
         )));
     }
     Ok(())
