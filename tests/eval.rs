@@ -109,3 +109,69 @@ fn bad_requests_exit_2_with_a_reason() {
     assert_eq!(r["ape"]["translation"]["max"], 0.0);
     assert!(r.get("rpe").is_none());
 }
+
+#[test]
+fn trajectories_for_evo_and_their_refusals() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = write(&dir, "g.g2o", &[(4, 1.0, 2.0, 0.0), (2, -1.0, 0.5, 3.0)]);
+    let convert = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_pgo-convert"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    // Sorted by id; the id is the time stamp unless --stamps gives one.
+    let out = convert(&[&g, "--to", "tum", "-q"]);
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let stamps: Vec<&str> = text.lines().map(|l| l.split(' ').next().unwrap()).collect();
+    assert_eq!(stamps, ["2", "4"]);
+    let stamp_file = dir.path().join("stamps.txt");
+    std::fs::write(&stamp_file, "# id stamp\n2 10.5\n4 11\n").unwrap();
+    let stamp_file = stamp_file.to_str().unwrap();
+    let out = convert(&[&g, "--to", "tum", "--stamps", stamp_file, "-q"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("10.5 -1 0.5 0 0 0 ") && text.contains("\n11 1 2 0 0 0 0 1\n"));
+    // Refusals: exit 2, a reason, and no file left behind.
+    std::fs::write(dir.path().join("short.txt"), "2 10.5\n").unwrap();
+    let short = dir.path().join("short.txt");
+    let target = dir.path().join("out.tum");
+    let target = target.to_str().unwrap();
+    for (args, says) in [
+        (
+            vec![
+                &g[..],
+                "--to",
+                "tum",
+                "--stamps",
+                short.to_str().unwrap(),
+                "-o",
+                target,
+            ],
+            "no time stamp for vertex 4",
+        ),
+        (
+            vec![&g[..], "--stamps", stamp_file, "-o", target],
+            "--stamps is for --to tum",
+        ),
+        (
+            vec![&g[..], "--to", "kitti", "--to-dialect", "g2o", "-o", target],
+            "poses only",
+        ),
+    ] {
+        let out = convert(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {out:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(says),
+            "{out:?}"
+        );
+        assert!(!std::path::Path::new(target).exists());
+    }
+    let bad = dir.path().join("bad.txt");
+    std::fs::write(&bad, "2 x\n").unwrap();
+    let out = convert(&[&g, "--to", "tum", "--stamps", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("bad.txt:1: 'x' is not a finite time stamp")
+    );
+}

@@ -23,7 +23,7 @@ _pgo__convert() {
 
     case "${cmd}" in
         pgo__convert)
-            opts="-o -q -h -V --output --from --to --dialect --to-dialect --reindex --landmarks --landmark-offset --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-o -q -h -V --output --from --to --stamps --dialect --to-dialect --reindex --landmarks --landmark-offset --strict --ignore-equiv --allow-indefinite --stats --json --timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -42,7 +42,11 @@ _pgo__convert() {
                     return 0
                     ;;
                 --to)
-                    COMPREPLY=($(compgen -W "g2o toro" -- "${cur}"))
+                    COMPREPLY=($(compgen -W "g2o toro tum kitti" -- "${cur}"))
+                    return 0
+                    ;;
+                --stamps)
+                    COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;
                 --dialect)

@@ -1,8 +1,11 @@
 complete -c pgo-convert -s o -l output -d 'Output file, or - for stdout' -r
 complete -c pgo-convert -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
-complete -c pgo-convert -l to -d 'Output format [default: from the output\'s extension, else the input format]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
-toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
+complete -c pgo-convert -l to -d 'Output format [default: from the output\'s extension, else the input format]; tum and kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y 0 0 0 qz qw` with t the vertex id or --stamps; KITTI: the rows of [R | t])' -r -f -a "g2o\t''
+toro\t''
+tum\t''
+kitti\t''"
+complete -c pgo-convert -l stamps -d 'With --to tum: time stamps of the poses, a file of `id stamp` lines [default: the vertex id]' -r
 complete -c pgo-convert -l dialect -d 'How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]' -r -f -a "g2o\t'Information, g2o order `I11 I12 I13 I22 I23 I33` (g2o; GTSAM\'s readG2o)'
 toro-info\t'Information, TORO order `ff fs ss rr fr sr` (TORO, HOG-Man)'
 toro-cov\t'Covariance, TORO order (GTSAM\'s `.graph` files, read by `load2D` as covariances)'

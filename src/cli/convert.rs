@@ -4,6 +4,7 @@ use super::common::{RerunArgs, to_json_line, write_stdout};
 use super::progress_bar::Progress;
 use crate::error::Error;
 use crate::graph::NoiseKind;
+use crate::io::trajectory::{TrajectoryFormat, read_stamps, write_trajectory};
 use crate::io::{self, Dialect, Format, ReadOptions, WriteOptions};
 use crate::stats::GraphStats;
 use clap::Parser;
@@ -19,7 +20,8 @@ Examples:
   cat M3500.g2o | pgo-convert - --reindex --to g2o -o M3500-dense.g2o
   pgo-convert w20000.txt --dialect g2o -o w20000.g2o   EDGE2 tags, g2o-order information
   pgo-convert cityTrees10000.g2o --landmarks g2o -o trees.g2o   LANDMARK2 -> VERTEX_XY/EDGE_SE2_XY
-  pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back";
+  pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back
+  pgo-convert intel-opt.g2o --to tum -o intel-opt.tum   the poses as a TUM trajectory for evo";
 
 /// Convert planar pose graphs between g2o and TORO, losslessly, or report statistics.
 ///
@@ -50,9 +52,16 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub from: Option<Format>,
 
-    /// Output format [default: from the output's extension, else the input format]
+    /// Output format [default: from the output's extension, else the input format]; tum and
+    /// kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y 0 0 0
+    /// qz qw` with t the vertex id or --stamps; KITTI: the rows of [R | t])
     #[arg(long, value_enum, value_name = "FORMAT", conflicts_with = "stats")]
-    pub to: Option<Format>,
+    pub to: Option<Target>,
+
+    /// With --to tum: time stamps of the poses, a file of `id stamp` lines [default: the vertex
+    /// id]
+    #[arg(long, value_name = "FILE", conflicts_with = "stats")]
+    pub stamps: Option<String>,
 
     /// How to read the six noise values of each edge [default: g2o for EDGE_SE2 tags, toro-info
     /// for EDGE2/EDGE tags]
@@ -121,6 +130,33 @@ pub struct Args {
     pub rerun: RerunArgs,
 }
 
+/// What `--to` writes: a graph format, or a trajectory of the poses alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Target {
+    G2o,
+    Toro,
+    Tum,
+    Kitti,
+}
+
+impl Target {
+    fn graph_format(self) -> Option<Format> {
+        match self {
+            Target::G2o => Some(Format::G2o),
+            Target::Toro => Some(Format::Toro),
+            Target::Tum | Target::Kitti => None,
+        }
+    }
+
+    fn trajectory_format(self) -> Option<TrajectoryFormat> {
+        match self {
+            Target::Tum => Some(TrajectoryFormat::Tum),
+            Target::Kitti => Some(TrajectoryFormat::Kitti),
+            Target::G2o | Target::Toro => None,
+        }
+    }
+}
+
 /// Entry point of the `pgo-convert` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
@@ -139,6 +175,16 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if !args.stats {
         io::check_output(&args.output)?;
     }
+    let trajectory = args.to.and_then(Target::trajectory_format);
+    if args.stamps.is_some() && trajectory != Some(TrajectoryFormat::Tum) {
+        return Err(Error::Invalid("--stamps is for --to tum".into()));
+    }
+    if trajectory.is_some() && (args.to_dialect.is_some() || args.landmarks.is_some()) {
+        return Err(Error::Invalid(
+            "a trajectory (--to tum|kitti) has poses only: no --to-dialect or --landmarks".into(),
+        ));
+    }
+    let stamps = args.stamps.as_deref().map(read_stamps).transpose()?;
     let rec = args.rerun.recorder("pgo-convert")?;
     let progress = Progress::start("pgo-convert", args.quiet, args.progress);
     progress.phase(&format!("reading {}", display_name(&args.input, "<stdin>")));
@@ -189,8 +235,42 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
 
+    if let Some(trajectory) = trajectory {
+        if args.reindex {
+            graph.reindex();
+        }
+        let t1 = Instant::now();
+        progress.phase(&format!(
+            "writing {}",
+            display_name(&args.output, "<stdout>")
+        ));
+        io::write_atomic(&args.output, |out, name| {
+            write_trajectory(&graph, trajectory, stamps.as_ref(), out, name)
+        })?;
+        let write_s = t1.elapsed().as_secs_f64();
+        progress.finish();
+        if !args.quiet {
+            eprintln!(
+                "pgo-convert: {input_summary} -> {}: {} trajectory of {} poses sorted by id{}",
+                display_name(&args.output, "<stdout>"),
+                trajectory.name(),
+                graph.num_poses(),
+                if graph.edges.is_empty() && graph.landmarks.is_empty() {
+                    ""
+                } else {
+                    " (edges and landmarks left out)"
+                }
+            );
+        }
+        if args.timings {
+            eprintln!("timings: read_s={read_s:.6} write_s={write_s:.6}");
+        }
+        rec.finish()?;
+        return Ok(ExitCode::SUCCESS);
+    }
     let format = args
         .to
+        .and_then(Target::graph_format)
         .or_else(|| Format::from_extension(&args.output))
         .unwrap_or(report.format);
     let dialect = args.to_dialect.unwrap_or(format.default_dialect());

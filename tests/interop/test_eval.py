@@ -103,3 +103,35 @@ def test_rpe_equals_evo(ring, delta, all_pairs):
         rpe.process_data((ref, traj))
         assert_same(ours["rpe"][key], rpe.get_all_statistics(), f"RPE {key} delta {delta}")
         assert ours["rpe"][key]["count"] == len(rpe.error)
+
+
+@pytest.mark.parametrize("fmt", ["tum", "kitti"])
+def test_evo_reads_pgo_trajectories_with_pgo_evals_ape(ring, fmt, tmp_path):
+    """pgo-convert --to tum|kitti: evo reads both trajectories, and its APE (aligned) equals
+    pgo-eval's on the g2o files."""
+    est, gt, _, _ = ring
+    files = {}
+    for name, path in [("est", est), ("gt", gt)]:
+        out = tmp_path / f"{name}.{fmt}"
+        subprocess.run(
+            [pgo_binary("pgo-convert"), path, "--to", fmt, "-o", out, "-q"],
+            check=True,
+            capture_output=True,
+        )
+        files[name] = str(out)
+    if fmt == "tum":
+        ref = file_interface.read_tum_trajectory_file(files["gt"])
+        traj = file_interface.read_tum_trajectory_file(files["est"])
+    else:
+        ref = file_interface.read_kitti_poses_file(files["gt"])
+        traj = file_interface.read_kitti_poses_file(files["est"])
+    assert ref.num_poses == traj.num_poses == 434
+    traj.align(ref, correct_scale=False)
+    ours = pgo_eval(est, gt)
+    for relation, key in [
+        (evo_metrics.PoseRelation.translation_part, "translation"),
+        (evo_metrics.PoseRelation.rotation_angle_deg, "rotation_deg"),
+    ]:
+        ape = evo_metrics.APE(relation)
+        ape.process_data((ref, traj))
+        assert_same(ours["ape"][key], ape.get_all_statistics(), f"{fmt} APE {key}")

@@ -13,12 +13,14 @@ pub mod lexer;
 mod options;
 mod reader;
 pub mod toro;
+pub mod trajectory;
 mod writer;
 
 pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
 pub use writer::{
-    Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_path,
+    Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_atomic,
+    write_path,
 };
 
 use crate::graph::NoiseKind;

@@ -246,9 +246,20 @@ pub fn check_output(path: &str) -> crate::Result<()> {
 /// [`remove_temporary_files`] (a tool's interrupt handler). Errors name `path`, never the
 /// temporary file.
 pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate::Result<()> {
+    write_atomic(path, |out, name| write_named(graph, options, out, name))
+}
+
+/// Writes a file the way [`write_path`] does, whatever it holds: `write(out, name)` writes to
+/// `out` (stdout for `-`, a device or FIFO in place, else a temporary file renamed over `path`
+/// once complete and listed for [`remove_temporary_files`]), `name` being what its errors call
+/// the output.
+pub fn write_atomic(
+    path: &str,
+    write: impl FnOnce(&mut dyn Write, &str) -> crate::Result<()>,
+) -> crate::Result<()> {
     if path == "-" {
         let stdout = std::io::stdout();
-        return write_named(graph, options, stdout.lock(), "<stdout>");
+        return write(&mut stdout.lock(), "<stdout>");
     }
     let target = Path::new(path);
     // A device or a FIFO (/dev/null, /dev/stdout, a named pipe) is written in place: renaming a
@@ -261,7 +272,7 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
             .write(true)
             .open(target)
             .map_err(|e| Error::io(path, e))?;
-        return write_named(graph, options, std::io::BufWriter::new(file), path);
+        return write(&mut std::io::BufWriter::new(file), path);
     }
     if target.is_dir() {
         // Else the rename of the temporary file over it fails with a less telling message.
@@ -274,7 +285,7 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
         .tempfile_in(directory_of(target))
         .map_err(io)?;
     let _listed = Pending::list(tmp.path());
-    write_named(graph, options, std::io::BufWriter::new(tmp.as_file()), path)?;
+    write(&mut std::io::BufWriter::new(tmp.as_file()), path)?;
     set_default_permissions(tmp.path()).map_err(io)?;
     tmp.persist(target).map_err(|e| io(e.error))?;
     Ok(())
