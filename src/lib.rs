@@ -54,6 +54,7 @@ pub mod linalg;
 pub mod problem;
 pub mod progress;
 pub mod refine;
+pub mod robust;
 pub mod simulate;
 pub mod solve;
 pub mod spectrum;

@@ -18,6 +18,7 @@ const FLOORS: &[&[&str]] = &[
     &["staircase", "dual", "refine"],
     &["spectrum"],
     &["solve", "viz"],
+    &["robust"],
     &["cli"],
 ];
 

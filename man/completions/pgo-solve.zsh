@@ -33,12 +33,17 @@ staircase\:"The scalable solver\: Riemannian Newton, sparse certificate, Riemann
 '--solver=[SDP solver for the dual, on the components the sdp method solves (a warning if none) \[default\: ipm\]]:SOLVER:((ipm\:"The dedicated primal-dual interior-point method (default build)"
 clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \`clarabel-sdp\`)"))' \
 '--tol=[Relative suboptimality bound under which the result is called certified]:REL:_default' \
+'--robust=[Robust estimation against false loop closures by graduated non-convexity with this loss (tls\: truncated least squares, gm\: Geman-McClure); see Robust below]:LOSS:((tls\:"Truncated least squares\: rho(r) = min(r^2, c^2)"
+gm\:"Geman-McClure\: rho(r) = c^2 r^2 / (c^2 + r^2)"))' \
+'--inlier-threshold=[With --robust\: the inlier threshold c^2 on r_e^2 \[default\: 0.5 * chi2inv(0.99, 3) = 5.672, GTSAM'\''s\]]:C2:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)]' \
+'--all-edges-uncertain[With --robust\: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)]' \
+'--drop-outliers[With --robust\: write the estimate without the rejected edges (by default -o holds every edge as read)]' \
 '--fail-uncertified[Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \

@@ -22,6 +22,8 @@ pub struct ReadReport {
     pub warnings: Vec<Warning>,
     /// Number of lines read.
     pub lines: usize,
+    /// The line of each edge of the graph, in its order (1-based).
+    pub edge_lines: Vec<usize>,
 }
 
 /// Reads a pose graph from a file path, or from stdin when `path` is `-`.
@@ -315,6 +317,7 @@ impl<'o> Reader<'o> {
             dialect_reason,
             warnings,
             lines: self.lines,
+            edge_lines: self.acc.sites.iter().map(|s| s.line as usize).collect(),
         };
         Ok((graph, report))
     }
