@@ -38,7 +38,8 @@ a message saying where.
 Robust (--robust tls|gm): graduated non-convexity (Yang, Antonante, Tzoumas, Carlone, RA-L 2020)
 with GTSAM's schedule: per-edge weights w_e in [0, 1] multiply tau_e and kappa_e, each weighted
 problem is solved by pgo's solver, the weights follow in closed form from the residuals
-r_e^2 = (tau_e |p_j - p_i - r_i Delta_e|^2 + kappa_e |r_j - r_i R_e|^2) / 2 against the threshold
+r_e^2 = (tau_e |p_j - p_i - r_i Delta_e|^2 + kappa_e |r_j - r_i R_e|^2 / 2) / 2 (GTSAM's error of an
+isotropic information matrix, to first order) against the threshold
 c^2 (--inlier-threshold, default 0.5 * chi2inv(0.99, 3) = 5.672), mu steps by 1.4, and it stops
 on binary weights or a converged cost. Odometry edges (consecutive ids) are known inliers unless
 --all-edges-uncertain. Edges of final weight < 1/2 are rejected; the graph without them is then

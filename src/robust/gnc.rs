@@ -6,17 +6,20 @@
 //! The robust problem is min_x Σ_e ρ(r_e(x)) over the edges e, with the edge's residual
 //!
 //! ```text
-//! r_e²(x) = ½ (τ_e |p_j − p_i − r_i Δ_e|² + κ_e |r_j − r_i R_e|²)
+//! r_e²(x) = ½ (τ_e |p_j − p_i − r_i Δ_e|² + ½ κ_e |r_j − r_i R_e|²)
 //! ```
 //!
-//! (half the edge's term of the cost f, eq. (8) with the weights τ_e, κ_e of `--weights`: for
-//! isotropic information this is GTSAM's error ½‖e‖²_Ω in translation, twice it in rotation), and
-//! ρ the truncated least squares ρ(r) = min(r², c̄²) (TLS) or Geman-McClure
-//! ρ(r) = c̄² r² / (c̄² + r²) (GM). GNC replaces ρ by a surrogate ρ_μ (paper eq. (8) for GM,
-//! eq. (10) for TLS) and, by the Black-Rangarajan duality (paper Sec. III-A, eq. (5)), alternates
+//! with the weights τ_e, κ_e of `--weights`: under the isotropic weights (τ = 2/tr(Ω_tt⁻¹),
+//! κ = 2Ω_θθ) and |r_j − r_i R_e|² = 2 − 2cos e_θ ≈ e_θ², this is GTSAM's error ½ eᵀΩe of an
+//! isotropic Ω to first order, the quantity GTSAM's threshold is a chi-square quantile of (f's
+//! own edge term counts the rotation twice: SE-Sync's κ). ρ is the truncated least squares
+//! ρ(r) = min(r², c̄²) (TLS) or Geman-McClure ρ(r) = c̄² r² / (c̄² + r²) (GM). GNC replaces ρ by
+//! a surrogate ρ_μ (paper eq. (8) for GM, eq. (10) for TLS) and, by the Black-Rangarajan duality
+//! (paper Sec. III-A, eq. (5)), alternates
 //!
-//! 1. the weighted problem min_x Σ_e w_e r_e²(x): pgo's f with τ_e, κ_e scaled by w_e, solved
-//!    (and certified where the relaxation is exact) by [`crate::solve::solve`];
+//! 1. the weighted problem min_x Σ_e w_e r_e²(x): pgo's f with the weights w_e τ_e and
+//!    w_e κ_e / 2, solved (and certified for those weights where the relaxation is exact) by
+//!    [`crate::solve::solve`];
 //! 2. the weights in closed form (paper eq. (12) for GM, eq. (14) for TLS):
 //!    GM: w_e = (μc̄² / (r_e² + μc̄²))²;
 //!    TLS: w_e = 1 if r_e² ≤ μ/(μ+1) c̄², 0 if r_e² ≥ (μ+1)/μ c̄², else c̄ √(μ(μ+1)) / r_e − μ;
@@ -29,18 +32,15 @@
 //! when μ reaches 1 (GM), when the weighted cost Σ w_e r_e² changes by less than 10⁻⁵ relative
 //! from one iteration to the next, or after 100 iterations (GTSAM's defaults).
 //!
-//! The threshold c̄² is GTSAM's rule `0.5 * chi2inv(0.99, 3)` by default, meant as the 99%
-//! quantile of ½ eᵀΩe under Gaussian noise of three degrees of freedom. Under the isotropic
-//! weights r_e² ≈ ½ eₜᵀΩₜₜeₜ + Ω_θθ e_θ² counts the rotation twice (SE-Sync's κ = 2Ω_θθ), so an
-//! inlier whose noise is exactly as its isotropic information says exceeds the default threshold
-//! with probability 4.2% (P(½χ²₂ + χ²₁ > 5.672)), not 1%; `--inlier-threshold` sets another.
+//! The threshold c̄² is GTSAM's rule `0.5 * chi2inv(0.99, 3)` by default: an edge whose noise is
+//! as its (isotropic) information says stays below it with probability 99%.
 //! Odometry edges (between consecutive ids) are known inliers with weight 1 unless told
 //! otherwise (GTSAM's `knownInliers`).
 //!
 //! The answer: edges of final weight ≥ ½ are the inliers (TLS weights end binary); the graph of
-//! the inliers alone, with its original weights, is solved once more and certified. That
-//! certificate proves the estimate optimal for the inlier set, which GNC chose: it says nothing
-//! of the TLS problem's global optimum.
+//! the inliers alone is solved once more under the weights τ_e, κ_e of `--weights` (pgo's f, not
+//! the κ/2 of the residual) and certified. That certificate proves the estimate optimal for the
+//! inlier set, which GNC chose: it says nothing of the TLS problem's global optimum.
 //!
 //! Warm starts: [`crate::solve::solve`] takes no initial estimate (the scalable solver starts from
 //! its chordal initialization, Algorithm 1 needs none), so each inner problem is solved from
@@ -185,7 +185,8 @@ impl RobustSolution {
     }
 }
 
-/// r_e² of every edge of `graph` at `poses` (see the module documentation).
+/// ½ of each edge's term of f under `base` at `poses`: r_e² when `base` holds (τ_e, κ_e / 2)
+/// (see the module documentation).
 pub fn residuals(
     graph: &PoseGraph,
     base: &[EdgeWeight],
@@ -286,7 +287,14 @@ pub fn robust_solve(graph: &PoseGraph, options: &RobustOptions) -> crate::Result
             options.mu_step
         )));
     }
-    let base = edge_weights(graph, options.solve.weights)?;
+    // The weights of the residual r_e²: τ_e and κ_e / 2.
+    let base: Vec<EdgeWeight> = edge_weights(graph, options.solve.weights)?
+        .into_iter()
+        .map(|w| EdgeWeight {
+            tau: w.tau,
+            kappa: 0.5 * w.kappa,
+        })
+        .collect();
     let m = graph.edges.len();
     let uncertain: Vec<bool> = graph
         .edges
