@@ -293,7 +293,7 @@ fn corrupt(args: &Args, input: &str) -> crate::Result<ExitCode> {
     if let Some(list) = &args.outlier_list {
         io::check_output(list)?;
     }
-    let (mut graph, report) = io::read_path(input, &Default::default())?;
+    let (mut graph, mut report) = io::read_path(input, &Default::default())?;
     crate::cli::print_warnings(&report.warnings);
     let config = OutlierConfig {
         count: args.outliers.unwrap_or(0),
@@ -312,15 +312,28 @@ fn corrupt(args: &Args, input: &str) -> crate::Result<ExitCode> {
         .convert_noise(crate::graph::NoiseKind::Information)
         .map_err(|k| Error::Invalid(format!("edge {k}: its covariance matrix is singular")))?;
     let dialect = format.default_dialect();
-    io::write_path(&graph, WriteOptions { format, dialect }, &args.output)?;
+    // Plain EDGE_SE2 outliers, as Vertigo's generator writes them without -s or -m.
+    if let Some(v) = &mut report.vertigo {
+        v.kinds
+            .resize(graph.edges.len(), crate::vertigo::EdgeKind::Plain);
+    }
+    io::write_path_with(
+        &graph,
+        report.vertigo.as_ref(),
+        WriteOptions { format, dialect },
+        &args.output,
+    )?;
+    // The writer puts one vertex line per pose first, then the switch variables, then the edges
+    // in order.
+    let first_edge_line =
+        graph.num_poses() + report.vertigo.as_ref().map_or(0, |v| v.switches.len()) + 1;
     if let Some(list) = &args.outlier_list {
-        // The writer puts one vertex line per pose first, then the edges in order.
         let mut text = String::from("# line i j: the outliers added, lines of the output file\n");
         for &k in &added {
             let e = &graph.edges[k];
             text += &format!(
                 "{} {} {}\n",
-                graph.num_poses() + k + 1,
+                first_edge_line + k,
                 graph.ids[e.i],
                 graph.ids[e.j]
             );

@@ -302,7 +302,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-solve")?;
     let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
-    let (mut graph, read_report) = args.input.read_shown(&progress)?;
+    let (mut graph, mut read_report) = args.input.read_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
     rec.graph(&graph);
     if args.method == Method::Sdp {
@@ -334,6 +334,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             let report = RobustReport::new(&r, &graph, &read_report.edge_lines, &robust_options);
             if args.drop_outliers {
                 graph = crate::robust::gnc::without_edges(&graph, &r.rejected);
+                if let Some(v) = &mut read_report.vertigo {
+                    let keep: Vec<bool> = r.rejected.iter().map(|x| !x).collect();
+                    v.retain_edges(&keep);
+                }
             }
             (r.solution, Some(report))
         }
@@ -355,7 +359,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            write_graph(&mut graph, path, format)
+            write_graph(&mut graph, read_report.vertigo.as_ref(), path, format)
         }
         None => Ok(()),
     };
@@ -435,6 +439,7 @@ fn method_text(r: &Solution) -> String {
 /// Writes the solved graph to `path` in `format`.
 fn write_graph(
     graph: &mut crate::graph::PoseGraph,
+    vertigo: Option<&crate::vertigo::Vertigo>,
     path: &str,
     format: Format,
 ) -> crate::Result<()> {
@@ -443,7 +448,7 @@ fn write_graph(
         .convert_noise(crate::graph::NoiseKind::Information)
         .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
     let dialect = format.default_dialect();
-    io::write_path(graph, WriteOptions { format, dialect }, path)?;
+    io::write_path_with(graph, vertigo, WriteOptions { format, dialect }, path)?;
     Ok(())
 }
 
