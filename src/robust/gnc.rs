@@ -42,6 +42,13 @@
 //! the κ/2 of the residual) and certified. That certificate proves the estimate optimal for the
 //! inlier set, which GNC chose: it says nothing of the TLS problem's global optimum.
 //!
+//! The inner problems are solved without the Riemannian staircase by default (its budget above
+//! rank 1 is [`RobustOptions::inner_max_staircase_iterations`], 0): GNC needs their estimates,
+//! not their certificates, and the early ones, with outliers still weighted, are the problems
+//! whose relaxation is not exact, where the staircase spends its whole budget in vain (on
+//! manhattan + 100 outliers: 16 s of CPU with the default budget of 100, 1.7 s without, the
+//! same inliers found). The final inlier-set problem gets the full budget of `solve`.
+//!
 //! Warm starts: [`crate::solve::solve`] takes no initial estimate (the scalable solver starts from
 //! its chordal initialization, Algorithm 1 needs none), so each inner problem is solved from
 //! scratch.
@@ -95,6 +102,10 @@ pub struct RobustOptions {
     pub weights_tolerance: f64,
     /// Odometry edges (consecutive ids) keep weight 1.
     pub odometry_inliers: bool,
+    /// The staircase's iteration budget above rank 1 for the inner weighted problems (at most
+    /// `solve.max_staircase_iterations`; default 0: Riemannian Newton at rank 1 only, certified
+    /// where the certificate holds); the final inlier-set problem gets the full budget.
+    pub inner_max_staircase_iterations: usize,
     /// How the inner problems and the final one are solved (`weights` sets τ_e, κ_e; the inner
     /// problems are never refined, the final one if `refine` is set).
     pub solve: SolveOptions,
@@ -110,6 +121,7 @@ impl Default for RobustOptions {
             relative_cost_tolerance: 1e-5,
             weights_tolerance: 1e-4,
             odometry_inliers: true,
+            inner_max_staircase_iterations: 0,
             solve: SolveOptions::default(),
         }
     }
@@ -304,6 +316,9 @@ pub fn robust_solve(graph: &PoseGraph, options: &RobustOptions) -> crate::Result
     let inner_options = SolveOptions {
         weights: Weights::Isotropic,
         refine: false,
+        max_staircase_iterations: options
+            .inner_max_staircase_iterations
+            .min(options.solve.max_staircase_iterations),
         ..options.solve
     };
     let inner = |w: &[f64]| -> crate::Result<Solution> {
