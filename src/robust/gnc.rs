@@ -27,8 +27,12 @@
 //! then steps μ towards the original loss: TLS starts convex at μ₀ = c̄² / (2 r²_max − c̄²)
 //! (paper Remark 5) and multiplies μ by the step (1.4) each iteration, GM starts at
 //! μ₀ = 2 r²_max / c̄² and divides it by the step down to 1. r²_max is the largest residual of an
-//! uncertain edge at the least-squares estimate (every weight 1); if 2 r²_max ≤ c̄² (TLS) every
-//! edge is an inlier and GNC stops there (GTSAM's rule). It stops when the weights are binary within 10⁻⁴ (TLS),
+//! uncertain edge at the least-squares estimate (every weight 1), the estimate the first weights
+//! are computed from; if 2 r²_max ≤ c̄² (TLS) every edge is an inlier and GNC stops there
+//! (GTSAM's rule). GTSAM's `initializeMu` takes r²_max at its initial values instead (here: the
+//! file's vertices), a larger value and a smaller μ₀. Tried on intel.g2o with Vertigo's random
+//! outliers, that rule found 10 of 10 outliers at seed 2 (this one: 9), 499 of 500 at seed 1
+//! (496), 983 of 1000 at seed 1 (992), in 3-4 times the iterations. It stops when the weights are binary within 10⁻⁴ (TLS),
 //! when μ reaches 1 (GM), when the weighted cost Σ w_e r_e² changes by less than 10⁻⁵ relative
 //! from one iteration to the next, or after 100 iterations (GTSAM's defaults).
 //!
