@@ -55,6 +55,7 @@ pub mod linalg;
 pub mod problem;
 pub mod progress;
 pub mod refine;
+pub mod robust;
 pub mod simulate;
 pub mod solve;
 pub mod spectrum;
@@ -63,7 +64,7 @@ pub mod viz;
 
 /// The file layer (crate `pgo-io`): the pose graph as read, the g2o/TORO readers and writers,
 /// statistics.
-pub use pgo_io::{graph, io, stats};
+pub use pgo_io::{graph, io, stats, vertigo};
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};

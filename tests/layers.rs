@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 /// The floors of ARCHITECTURE.md, bottom first: a room may use only rooms on lower floors.
 const FLOORS: &[&[&str]] = &[
     // The file layer (the pgo-io crate, re-exported as crate::graph, io and stats) and the leaves.
-    &["graph", "progress"],
+    &["graph", "progress", "vertigo"],
     &["error"],
     &["io"],
     &["stats"],
@@ -18,6 +18,7 @@ const FLOORS: &[&[&str]] = &[
     &["staircase", "dual", "refine"],
     &["spectrum"],
     &["solve", "viz"],
+    &["robust"],
     &["cli"],
 ];
 

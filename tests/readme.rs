@@ -543,6 +543,24 @@ fn json_reports_are_documented() {
     )
     .unwrap();
     let landmarks = landmarks.to_str().unwrap();
+    // MIT with 5 false loop closures, for --robust.
+    let corrupted = dir.path().join("corrupted.g2o");
+    let out = Command::new(bin_dir().join("pgo-simulate"))
+        .current_dir(root())
+        .args([
+            "--corrupt",
+            "datasets/MIT.g2o",
+            "--outliers",
+            "5",
+            "--seed",
+            "1",
+            "-o",
+        ])
+        .arg(&corrupted)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let corrupted = corrupted.to_str().unwrap();
     let solved = dir.path().join("solved.g2o");
     let (mit, toy) = ("datasets/MIT.g2o", "datasets/paper_toy.g2o");
     let warning = with_warning.to_str().unwrap();
@@ -557,6 +575,7 @@ fn json_reports_are_documented() {
                 (warning, "--no-timings"),
                 (toy, "--weights unit"),
                 (landmarks, ""),
+                (corrupted, "--robust tls"),
             ],
         ),
         (

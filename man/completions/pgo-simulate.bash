@@ -23,7 +23,7 @@ _pgo__simulate() {
 
     case "${cmd}" in
         pgo__simulate)
-            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --landmarks --landmark-range --output --to --quiet --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --landmarks --landmark-range --output --to --quiet --corrupt --outliers --outlier-model --group --outlier-list --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -79,6 +79,26 @@ _pgo__simulate() {
                     ;;
                 --to)
                     COMPREPLY=($(compgen -W "g2o toro" -- "${cur}"))
+                    return 0
+                    ;;
+                --corrupt)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --outliers)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --outlier-model)
+                    COMPREPLY=($(compgen -W "random local" -- "${cur}"))
+                    return 0
+                    ;;
+                --group)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --outlier-list)
+                    COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;
                 --rerun-save)

@@ -11,6 +11,12 @@ complete -c pgo-simulate -l landmark-range -d 'A pose observes the landmarks wit
 complete -c pgo-simulate -s o -l output -d 'Output file, or - for stdout' -r
 complete -c pgo-simulate -l to -d 'Output format [default: from the output\'s extension (.g2o, .graph), else g2o]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
+complete -c pgo-simulate -l corrupt -d 'Add false loop closures to this graph (- for stdin) instead of generating one (see Outliers below)' -r
+complete -c pgo-simulate -l outliers -d 'Number of outlier groups to add to --corrupt\'s graph' -r
+complete -c pgo-simulate -l outlier-model -d 'Which pose pairs outliers join: random (any two poses) or local (at most 20 ids apart)' -r -f -a "random\t'Any two poses, uniformly'
+local\t'Poses at most 20 ids apart'"
+complete -c pgo-simulate -l group -d 'Outliers per group: G consecutive pairs (v1+k, v2+k) sharing one measurement' -r
+complete -c pgo-simulate -l outlier-list -d 'Write the list of the added outliers here: one line \'LINE I J\' each' -r
 complete -c pgo-simulate -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-simulate -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-simulate -l force -d 'Generate however many loop closures the pairs model makes (see Size below)'

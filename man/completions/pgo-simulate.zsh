@@ -30,6 +30,12 @@ per-pose\:"Each pose j >= 2 with probability P_c closes one loop to an earlier p
 '--output=[Output file, or - for stdout]:OUT:_default' \
 '--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
+'(-n --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --side)--corrupt=[Add false loop closures to this graph (- for stdin) instead of generating one (see Outliers below)]:GRAPH:_default' \
+'--outliers=[Number of outlier groups to add to --corrupt'\''s graph]:N:_default' \
+'--outlier-model=[Which pose pairs outliers join\: random (any two poses) or local (at most 20 ids apart)]:MODEL:((random\:"Any two poses, uniformly"
+local\:"Poses at most 20 ids apart"))' \
+'--group=[Outliers per group\: G consecutive pairs (v1+k, v2+k) sharing one measurement]:G:_default' \
+'--outlier-list=[Write the list of the added outliers here\: one line '\''LINE I J'\'' each]:FILE:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--force[Generate however many loop closures the pairs model makes (see Size below)]' \

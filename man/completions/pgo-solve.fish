@@ -17,12 +17,17 @@ clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `
 complete -c pgo-solve -l tol -d 'Relative suboptimality bound under which the result is called certified' -r
 complete -c pgo-solve -l max-rank -d 'The staircase\'s largest rank: where the certificate fails at rank 1, the scalable solver lifts the estimate to ranks 2..P (docs/method.md §3.2); a larger P can find better estimates and tighter bounds where the relaxation is not exact, at a cost that grows as P³ per Newton step' -r
 complete -c pgo-solve -l staircase-budget -d 'The staircase\'s work above rank 1 at most, in 10⁹ multiply-adds of its sparse factorizations (Newton steps, certificate attempts), counted from the factors\' structure and not timed, so the answer is the same on every machine; about 20 per second on one core. Past it the solver reports the best estimate and bound it reached and why it stopped. Graphs of a few hundred poses never reach the default; long false loop closures (outliers) fill the factors and reach it in seconds (try --robust)' -r
+complete -c pgo-solve -l robust -d 'Robust estimation against false loop closures by graduated non-convexity with this loss (tls: truncated least squares, gm: Geman-McClure); see Robust below' -r -f -a "tls\t'Truncated least squares: rho(r) = min(r^2, c^2)'
+gm\t'Geman-McClure: rho(r) = c^2 r^2 / (c^2 + r^2)'"
+complete -c pgo-solve -l inlier-threshold -d 'With --robust: the inlier threshold c^2 on r_e^2 [default: 0.5 * chi2inv(0.99, 3) = 5.672, GTSAM\'s]' -r
 complete -c pgo-solve -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-solve -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-solve -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
 complete -c pgo-solve -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
 complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
 complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2) before writing it; the report\'s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)'
+complete -c pgo-solve -l all-edges-uncertain -d 'With --robust: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)'
+complete -c pgo-solve -l drop-outliers -d 'With --robust: write the estimate without the rejected edges (by default -o holds every edge as read)'
 complete -c pgo-solve -l fail-uncertified -d 'Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'
 complete -c pgo-solve -l no-timings -d 'Leave the timings out of the report (for byte-identical output)'

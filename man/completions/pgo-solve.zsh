@@ -35,12 +35,17 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--tol=[Relative suboptimality bound under which the result is called certified]:REL:_default' \
 '--max-rank=[The staircase'\''s largest rank\: where the certificate fails at rank 1, the scalable solver lifts the estimate to ranks 2..P (docs/method.md §3.2); a larger P can find better estimates and tighter bounds where the relaxation is not exact, at a cost that grows as P³ per Newton step]:P:_default' \
 '--staircase-budget=[The staircase'\''s work above rank 1 at most, in 10⁹ multiply-adds of its sparse factorizations (Newton steps, certificate attempts), counted from the factors'\'' structure and not timed, so the answer is the same on every machine; about 20 per second on one core. Past it the solver reports the best estimate and bound it reached and why it stopped. Graphs of a few hundred poses never reach the default; long false loop closures (outliers) fill the factors and reach it in seconds (try --robust)]:GMA:_default' \
+'--robust=[Robust estimation against false loop closures by graduated non-convexity with this loss (tls\: truncated least squares, gm\: Geman-McClure); see Robust below]:LOSS:((tls\:"Truncated least squares\: rho(r) = min(r^2, c^2)"
+gm\:"Geman-McClure\: rho(r) = c^2 r^2 / (c^2 + r^2)"))' \
+'--inlier-threshold=[With --robust\: the inlier threshold c^2 on r_e^2 \[default\: 0.5 * chi2inv(0.99, 3) = 5.672, GTSAM'\''s\]]:C2:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
 '--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)]' \
+'--all-edges-uncertain[With --robust\: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)]' \
+'--drop-outliers[With --robust\: write the estimate without the rejected edges (by default -o holds every edge as read)]' \
 '--fail-uncertified[Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way]' \
 '--json[Print the report as one JSON object on stdout (the graph then goes only to -o)]' \
 '--no-timings[Leave the timings out of the report (for byte-identical output)]' \

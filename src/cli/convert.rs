@@ -314,6 +314,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         None => {}
     }
     if args.reindex {
+        if report.vertigo.is_some() {
+            return Err(Error::Invalid(
+                "--reindex renumbers the poses but not Vertigo's switch variables, whose ids share the poses' id space: convert without --reindex".into(),
+            ));
+        }
         graph.reindex();
     }
     let t1 = Instant::now();
@@ -321,7 +326,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         "writing {}",
         display_name(&args.output, "<stdout>")
     ));
-    io::write_path(&graph, WriteOptions { format, dialect }, &args.output)?;
+    io::write_path_with(
+        &graph,
+        report.vertigo.as_ref(),
+        WriteOptions { format, dialect },
+        &args.output,
+    )?;
     let write_s = t1.elapsed().as_secs_f64();
     progress.finish();
     if !args.quiet {

@@ -3,6 +3,7 @@
 use super::common::RerunArgs;
 use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
+use crate::robust::outliers::{OutlierConfig, OutlierModel, add_outliers};
 use crate::simulate::{
     LandmarkConfig, LoopModel, RotationNoise, SimulationConfig, TranslationNoise, add_landmarks,
     simulate,
@@ -21,11 +22,21 @@ Examples:
   pgo-simulate -n 1000000 --loop-model per-pose --loop-probability 0.05 -o big.g2o
   pgo-simulate -n 100 --loop-probability 0 --landmarks 30 --landmark-range 3 -o slam.g2o
                                                  a pose-landmark world: odometry + landmarks
+  pgo-simulate --corrupt intel.g2o --outliers 100 --seed 1 -o intel-100.g2o --outlier-list intel-100.txt
+  pgo-simulate --corrupt M3500.g2o --outliers 50 --outlier-model local --group 10 -o local.g2o
 
 Size: the paper's model draws a loop closure for every pair of poses, about P_c n^2/2 of them:
 -n 100000 would make 5e8 edges (about 45 GB of g2o text). Graphs of more than 10^7 expected
 loop closures, or more than 10^10 pairs to draw, are refused with their size unless --force is
-given; --loop-model per-pose grows linearly (about P_c n loop closures).";
+given; --loop-model per-pose grows linearly (about P_c n loop closures).
+
+Outliers (--corrupt GRAPH --outliers N): Vertigo's generator (Suenderhauf and Protzel's robust
+SLAM benchmark). N groups, each a pair of poses v1 < v2 (dense indices, never consecutive;
+random: both uniform; local: v2 at most 20 after v1) and one measurement x, y ~ N(0, 0.3 m),
+theta ~ N(0, 10 deg), appended as G edges (v1+k, v2+k), k = 0..G-1, after the graph's edges,
+with the information matrix of the graph's first loop closure (first edge between ids that are
+not consecutive). The output holds the graph as read, then the outliers; --outlier-list writes
+one line 'LINE I J' per outlier: its line in the output file and its two ids.";
 
 /// Generate a random planar pose graph by the simulation model of Calafiore, Carlone and Dellaert
 /// (Sec. 6, eq. (47)), reproducibly.
@@ -104,8 +115,49 @@ pub struct Args {
     #[arg(short, long)]
     pub quiet: bool,
 
+    /// Add false loop closures to this graph (- for stdin) instead of generating one (see
+    /// Outliers below)
+    #[arg(long, value_name = "GRAPH", requires = "outliers", conflicts_with_all = ["n", "loop_probability", "loop_model", "force", "rotation_noise", "translation_noise", "side"])]
+    pub corrupt: Option<String>,
+
+    /// Number of outlier groups to add to --corrupt's graph
+    #[arg(long, value_name = "N", requires = "corrupt", value_parser = parse_count)]
+    pub outliers: Option<usize>,
+
+    /// Which pose pairs outliers join: random (any two poses) or local (at most 20 ids apart)
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODEL",
+        default_value = "random",
+        requires = "corrupt"
+    )]
+    pub outlier_model: OutlierModel,
+
+    /// Outliers per group: G consecutive pairs (v1+k, v2+k) sharing one measurement
+    #[arg(long, value_name = "G", default_value = "1", value_parser = parse_group, requires = "corrupt")]
+    pub group: usize,
+
+    /// Write the list of the added outliers here: one line 'LINE I J' each
+    #[arg(long, value_name = "FILE", requires = "corrupt")]
+    pub outlier_list: Option<String>,
+
     #[command(flatten)]
     pub rerun: RerunArgs,
+}
+
+fn parse_count(s: &str) -> Result<usize, String> {
+    s.parse()
+        .map_err(|_| format!("'{s}' is not a whole number >= 0"))
+}
+
+fn parse_group(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(g) if g >= 1 => Ok(g),
+        _ => Err(format!(
+            "the group size must be a whole number >= 1, found {s}"
+        )),
+    }
 }
 
 fn parse_poses(s: &str) -> Result<usize, String> {
@@ -155,6 +207,9 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
+    if let Some(input) = &args.corrupt {
+        return corrupt(args, input);
+    }
     let config = SimulationConfig {
         n: args.n,
         side: args.side,
@@ -269,4 +324,94 @@ fn check_size(config: &SimulationConfig) -> crate::Result<()> {
         "-n {} with --loop-probability {} {size}: use --loop-model per-pose (about P_c n loop closures, linear in n) or a smaller --loop-probability, or pass --force",
         config.n, config.loop_probability
     )))
+}
+
+/// `--corrupt`: the graph as read with Vertigo's outliers appended.
+fn corrupt(args: &Args, input: &str) -> crate::Result<ExitCode> {
+    io::check_output(&args.output)?;
+    if let Some(list) = &args.outlier_list {
+        io::check_output(list)?;
+    }
+    let (mut graph, mut report) = io::read_path(input, &Default::default())?;
+    crate::cli::print_warnings(&report.warnings);
+    let config = OutlierConfig {
+        count: args.outliers.unwrap_or(0),
+        model: args.outlier_model,
+        group: args.group,
+        noise: None,
+        seed: args.seed,
+    };
+    let added = add_outliers(&mut graph, &config)?;
+    let format = args
+        .to
+        .or_else(|| Format::from_extension(&args.output))
+        .unwrap_or(report.format);
+    // Information matrices in the format's own order (a covariance file is inverted).
+    graph
+        .convert_noise(crate::graph::NoiseKind::Information)
+        .map_err(|k| Error::Invalid(format!("edge {k}: its covariance matrix is singular")))?;
+    let dialect = format.default_dialect();
+    // Plain EDGE_SE2 outliers, as Vertigo's generator writes them without -s or -m.
+    if let Some(v) = &mut report.vertigo {
+        v.kinds
+            .resize(graph.edges.len(), crate::vertigo::EdgeKind::Plain);
+    }
+    io::write_path_with(
+        &graph,
+        report.vertigo.as_ref(),
+        WriteOptions { format, dialect },
+        &args.output,
+    )?;
+    // The writer puts one vertex line per pose first, then the switch variables, then the edges
+    // in order.
+    let first_edge_line =
+        graph.num_poses() + report.vertigo.as_ref().map_or(0, |v| v.switches.len()) + 1;
+    if let Some(list) = &args.outlier_list {
+        let mut text = String::from("# line i j: the outliers added, lines of the output file\n");
+        for &k in &added {
+            let e = &graph.edges[k];
+            text += &format!(
+                "{} {} {}\n",
+                first_edge_line + k,
+                graph.ids[e.i],
+                graph.ids[e.j]
+            );
+        }
+        write_text(list, &text)?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "pgo-simulate: {}: {} pose{}, {} edge{}; added {} outlier{} ({} group{} of {}, model {}, seed {}) after them -> {}: format {format}",
+            crate::cli::common::display_input(input),
+            graph.num_poses(),
+            if graph.num_poses() == 1 { "" } else { "s" },
+            graph.edges.len() - added.len(),
+            if graph.edges.len() - added.len() == 1 {
+                ""
+            } else {
+                "s"
+            },
+            added.len(),
+            if added.len() == 1 { "" } else { "s" },
+            config.count,
+            if config.count == 1 { "" } else { "s" },
+            config.group,
+            config.model.name(),
+            config.seed,
+            if args.output == "-" {
+                "<stdout>"
+            } else {
+                &args.output
+            },
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes `text` to `path` (stdout for `-`).
+fn write_text(path: &str, text: &str) -> crate::Result<()> {
+    if path == "-" {
+        return crate::cli::common::write_stdout(text.as_bytes());
+    }
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }

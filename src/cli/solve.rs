@@ -8,6 +8,8 @@ use crate::dual::rounding::Rounding;
 use crate::dual::solver::SdpSolver;
 use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
+use crate::robust::gnc::{DEFAULT_INLIER_THRESHOLD, GncIteration};
+use crate::robust::{Loss, RobustOptions, RobustSolution, StopReason, robust_solve};
 use crate::solve::{Method, Solution, SolveOptions, solve};
 use clap::Parser;
 use serde::Serialize;
@@ -21,6 +23,7 @@ Examples:
   pgo-solve ais2klinik.g2o -o ais2klinik-opt.g2o && pgo-certify ais2klinik.g2o --estimate ais2klinik-opt.g2o
   pgo-simulate -n 20 --seed 3 | pgo-solve - --weights unit --json -o /dev/null
   pgo-solve MIT.g2o --fail-uncertified -o MIT-opt.g2o || echo 'not certified (1) or error (2)'
+  pgo-solve intel-100.g2o --robust tls --drop-outliers -o intel-inliers.g2o
 
 Gauge: the estimate is placed in the input's frame: a component's pose named by a FIX line stays
 exactly where the input has it (else its smallest id does); the cost does not depend on that
@@ -30,7 +33,19 @@ choice. Several FIX poses in one component (known poses) are refused. Headings a
 Exit status: 0 solved, certified or not (the result line, or \"certified\" in --json, says
 which); 1 with --fail-uncertified, solved but not certified within --tol (the estimate is written
 all the same and the bound printed holds); 2 an error in the input, the flags or the output, with
-a message saying where.";
+a message saying where.
+
+Robust (--robust tls|gm): graduated non-convexity (Yang, Antonante, Tzoumas, Carlone, RA-L 2020)
+with GTSAM's schedule: per-edge weights w_e in [0, 1] multiply tau_e and kappa_e, each weighted
+problem is solved by pgo's solver, the weights follow in closed form from the residuals
+r_e^2 = (tau_e |p_j - p_i - r_i Delta_e|^2 + kappa_e |r_j - r_i R_e|^2 / 2) / 2 (GTSAM's error of an
+isotropic information matrix, to first order) against the threshold
+c^2 (--inlier-threshold, default 0.5 * chi2inv(0.99, 3) = 5.672), mu steps by 1.4, and it stops
+on binary weights or a converged cost. Odometry edges (consecutive ids) are known inliers unless
+--all-edges-uncertain. Edges of final weight < 1/2 are rejected; the graph without them is then
+solved again: cost, bound and \"certified\" are of that inlier set's problem, not of the TLS
+problem. The report lists every rejected edge (line, ids, r^2 at the final estimate). -o writes
+every edge as read, --drop-outliers only the inliers.";
 
 /// Solve a planar pose graph to global optimality and prove it.
 ///
@@ -96,6 +111,26 @@ pub struct Args {
     #[arg(long)]
     pub refine: bool,
 
+    /// Robust estimation against false loop closures by graduated non-convexity with this loss
+    /// (tls: truncated least squares, gm: Geman-McClure); see Robust below
+    #[arg(long, value_enum, value_name = "LOSS")]
+    pub robust: Option<Loss>,
+
+    /// With --robust: the inlier threshold c^2 on r_e^2 [default: 0.5 * chi2inv(0.99, 3) =
+    /// 5.672, GTSAM's]
+    #[arg(long, value_name = "C2", requires = "robust", value_parser = parse_threshold)]
+    pub inlier_threshold: Option<f64>,
+
+    /// With --robust: odometry edges (consecutive ids) may be rejected too (by default they are
+    /// known inliers)
+    #[arg(long, requires = "robust")]
+    pub all_edges_uncertain: bool,
+
+    /// With --robust: write the estimate without the rejected edges (by default -o holds every
+    /// edge as read)
+    #[arg(long, requires = "robust")]
+    pub drop_outliers: bool,
+
     /// Exit with status 1 when the result is not certified within --tol (the estimate is still
     /// written); without it, status 0 either way
     #[arg(long)]
@@ -114,6 +149,17 @@ pub struct Args {
 
     #[command(flatten)]
     pub rerun: RerunArgs,
+}
+
+fn parse_threshold(s: &str) -> Result<f64, String> {
+    let t: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if t.is_finite() && t > 0.0 {
+        Ok(t)
+    } else {
+        Err(format!(
+            "--inlier-threshold must be a finite number > 0, found {s}"
+        ))
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -137,14 +183,105 @@ pub struct Report<'a> {
     pub written_chi2: Option<f64>,
     /// Whether the written estimate is certified within --tol (never for a refined one).
     pub written_certified: bool,
+    /// With --robust: what GNC did and rejected (the figures above are then of the inlier
+    /// set's problem).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robust: Option<RobustReport>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
 }
 
+/// An edge GNC rejected.
+#[derive(Debug, Serialize)]
+pub struct RejectedEdge {
+    /// Its line in the input.
+    pub line: usize,
+    /// Its ids as written.
+    pub i: u32,
+    pub j: u32,
+    /// r_e^2 at the final (inlier-set) estimate.
+    pub residual_sq: f64,
+    /// Its final GNC weight.
+    pub weight: f64,
+}
+
+/// `--robust`'s part of the report.
+#[derive(Debug, Serialize)]
+pub struct RobustReport {
+    pub loss: Loss,
+    pub inlier_threshold: f64,
+    pub odometry_known_inliers: bool,
+    /// Edges of the input.
+    pub input_edges: usize,
+    /// Edges GNC could reject (not known inliers).
+    pub uncertain_edges: usize,
+    pub inliers: usize,
+    pub rejected: usize,
+    pub gnc_iterations: usize,
+    pub stop: StopReason,
+    /// The last mu (absent where GNC did not iterate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// How many of the inner weighted problems were certified (for their weights).
+    pub inner_certified: usize,
+    /// The problem the certificate is of.
+    pub certificate_of: &'static str,
+    pub rejected_edges: Vec<RejectedEdge>,
+    /// mu, weighted cost, outliers so far and inner certificate per iteration.
+    pub history: Vec<GncIteration>,
+}
+
+impl RobustReport {
+    fn new(
+        r: &RobustSolution,
+        graph: &crate::graph::PoseGraph,
+        lines: &[usize],
+        options: &RobustOptions,
+    ) -> Self {
+        let rejected_edges = r
+            .rejected
+            .iter()
+            .enumerate()
+            .filter(|(_, x)| **x)
+            .map(|(k, _)| {
+                let e = &graph.edges[k];
+                RejectedEdge {
+                    line: lines.get(k).copied().unwrap_or(0),
+                    i: graph.ids[e.i],
+                    j: graph.ids[e.j],
+                    residual_sq: r.residuals[k],
+                    weight: r.weights[k],
+                }
+            })
+            .collect::<Vec<_>>();
+        RobustReport {
+            loss: options.loss,
+            inlier_threshold: options.inlier_threshold,
+            odometry_known_inliers: options.odometry_inliers,
+            input_edges: graph.edges.len(),
+            uncertain_edges: r.uncertain.iter().filter(|&&u| u).count(),
+            inliers: graph.edges.len() - rejected_edges.len(),
+            rejected: rejected_edges.len(),
+            gnc_iterations: r.iterations.len(),
+            stop: r.stop,
+            mu: r.mu,
+            inner_certified: r.iterations.iter().filter(|i| i.certified).count(),
+            certificate_of: "the inlier set (the input without the rejected edges), not the robust problem",
+            rejected_edges,
+            history: r.iterations.clone(),
+        }
+    }
+}
+
 impl<'a> Report<'a> {
-    fn new(solution: &'a Solution, warnings: Vec<String>, timings: Option<Timings>) -> Self {
+    fn new(
+        solution: &'a Solution,
+        robust: Option<RobustReport>,
+        warnings: Vec<String>,
+        timings: Option<Timings>,
+    ) -> Self {
         let refined = solution.refined_chi2.is_some();
         Report {
             solution,
@@ -155,6 +292,7 @@ impl<'a> Report<'a> {
                 solution.chi2
             },
             written_certified: !refined && solution.certified,
+            robust,
             warnings,
             timings,
         }
@@ -180,7 +318,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-solve")?;
     let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
-    let (mut graph, read_report) = args.input.read_shown(&progress)?;
+    let (mut graph, mut read_report) = args.input.read_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
     rec.graph(&graph);
     if args.method == Method::Sdp {
@@ -196,7 +334,31 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         staircase_budget: args.staircase_budget * 1e9,
     };
     let t1 = Instant::now();
-    let solution = progress.watch(|| rec.observe(|| solve(&graph, &options)))?;
+    let (solution, robust) = match args.robust {
+        None => (
+            progress.watch(|| rec.observe(|| solve(&graph, &options)))?,
+            None,
+        ),
+        Some(loss) => {
+            let robust_options = RobustOptions {
+                loss,
+                inlier_threshold: args.inlier_threshold.unwrap_or(DEFAULT_INLIER_THRESHOLD),
+                odometry_inliers: !args.all_edges_uncertain,
+                solve: options,
+                ..Default::default()
+            };
+            let r = progress.watch(|| rec.observe(|| robust_solve(&graph, &robust_options)))?;
+            let report = RobustReport::new(&r, &graph, &read_report.edge_lines, &robust_options);
+            if args.drop_outliers {
+                graph = crate::robust::gnc::without_edges(&graph, &r.rejected);
+                if let Some(v) = &mut read_report.vertigo {
+                    let keep: Vec<bool> = r.rejected.iter().map(|x| !x).collect();
+                    v.retain_edges(&keep);
+                }
+            }
+            (r.solution, Some(report))
+        }
+    };
     let solve_s = t1.elapsed().as_secs_f64();
     graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
@@ -219,7 +381,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            write_graph(&mut graph, path, format)
+            write_graph(&mut graph, read_report.vertigo.as_ref(), path, format)
         }
         None => Ok(()),
     };
@@ -228,6 +390,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 
     let report = Report::new(
         &solution,
+        robust,
         read_report.warnings.iter().map(|w| w.to_string()).collect(),
         (!args.no_timings).then_some(Timings {
             read_s,
@@ -298,6 +461,7 @@ fn method_text(r: &Solution) -> String {
 /// Writes the solved graph to `path` in `format`.
 fn write_graph(
     graph: &mut crate::graph::PoseGraph,
+    vertigo: Option<&crate::vertigo::Vertigo>,
     path: &str,
     format: Format,
 ) -> crate::Result<()> {
@@ -306,7 +470,7 @@ fn write_graph(
         .convert_noise(crate::graph::NoiseKind::Information)
         .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
     let dialect = format.default_dialect();
-    io::write_path(graph, WriteOptions { format, dialect }, path)?;
+    io::write_path_with(graph, vertigo, WriteOptions { format, dialect }, path)?;
     Ok(())
 }
 
@@ -333,6 +497,9 @@ fn text_report(input: &str, report: &Report) -> String {
         method_text(r),
     );
     let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
+    if let Some(g) = &report.robust {
+        out += &robust_text(g);
+    }
     let chi2_text =
         |c: Option<f64>| c.map_or("undefined (a covariance matrix is singular)".into(), num);
     out += &row("cost", num(r.cost));
@@ -387,6 +554,10 @@ fn text_report(input: &str, report: &Report) -> String {
         "result",
         if r.certified && r.refined_chi2.is_some() {
             "certified optimal within the bound above (the estimate before refinement)".to_string()
+        } else if r.certified && report.robust.is_some() {
+            "certified optimal within the bound above for the inlier set (the input without the \
+             rejected edges); the robust (TLS/GM) problem itself is not certified"
+                .to_string()
         } else if r.certified {
             "certified optimal within the bound above".to_string()
         } else if r.components.iter().any(|c| c.method == Method::Staircase) {
@@ -443,5 +614,50 @@ fn text_report(input: &str, report: &Report) -> String {
             ),
         );
     }
+    out
+}
+
+/// The rows of `--robust`'s text report.
+fn robust_text(g: &RobustReport) -> String {
+    let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
+    let mut out = row(
+        "robust",
+        format!(
+            "GNC {}, threshold c^2 {} on r^2; {} iteration{} ({}; mu {}); {} of {} edges uncertain{}",
+            g.loss.name(),
+            num(g.inlier_threshold),
+            g.gnc_iterations,
+            if g.gnc_iterations == 1 { "" } else { "s" },
+            g.stop.text(),
+            g.mu.map_or("-".to_string(), num),
+            g.uncertain_edges,
+            g.input_edges,
+            if g.odometry_known_inliers {
+                " (odometry known inliers)"
+            } else {
+                ""
+            },
+        ),
+    );
+    out += &row(
+        "inliers",
+        format!(
+            "{} of {} edges ({} rejected); inner problems certified: {} of {}",
+            g.inliers, g.input_edges, g.rejected, g.inner_certified, g.gnc_iterations
+        ),
+    );
+    for e in &g.rejected_edges {
+        out += &row(
+            "rejected",
+            format!(
+                "line {}: {} -> {}, r^2 {}",
+                e.line,
+                e.i,
+                e.j,
+                num(e.residual_sq)
+            ),
+        );
+    }
+    out += "  the figures below are of the inlier set's problem\n";
     out
 }

@@ -7,7 +7,8 @@
 //! - [`io`]: lossless g2o and TORO readers and writers and their dialects (which order the six
 //!   noise values are in, information or covariance), with `PATH:LINE:COL` errors and warnings
 //!   ([`error`]);
-//! - [`stats`]: the statistics of a graph file (what `pgo-convert --stats` prints).
+//! - [`stats`]: the statistics of a graph file (what `pgo-convert --stats` prints);
+//! - [`vertigo`]: Vertigo's switchable and max-mixture lines, kept beside the graph.
 //!
 //! Cargo feature `clap` (off by default): `clap::ValueEnum` on [`io::Format`] and
 //! [`io::Dialect`], for command-line flags. An example is in the README.
@@ -16,6 +17,7 @@ pub mod error;
 pub mod graph;
 pub mod io;
 pub mod stats;
+pub mod vertigo;
 
 pub use error::{Error, Location, ParseError, ParseErrorKind, Result, Warning};
 pub use graph::{

@@ -7,6 +7,7 @@ use super::options::ReadOptions;
 use super::{g2o, toro};
 use crate::error::{Location, ParseError, ParseErrorKind};
 use crate::graph::{Edge, LandmarkForm, Pose2, SymMat2, SymMat3, VertexId};
+use crate::vertigo::{self, EdgeKind, SwitchPrior, SwitchVertex};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Family {
@@ -24,6 +25,10 @@ enum Tag {
     LandmarkVertex(LandmarkForm),
     Observation(LandmarkForm),
     Prior,
+    /// Vertigo's `EDGE_SE2_SWITCHABLE` (true) or `EDGE_SE2_MAXMIX` (false).
+    RobustEdge(bool),
+    SwitchVertex,
+    SwitchPrior,
     Comment,
     Unknown,
 }
@@ -58,6 +63,14 @@ fn classify(tag: &[u8]) -> Tag {
         Tag::Landmark
     } else if is(g2o::PRIOR) {
         Tag::Prior
+    } else if tag == vertigo::EDGE_SWITCHABLE.as_bytes() {
+        Tag::RobustEdge(true)
+    } else if tag == vertigo::EDGE_MAXMIX.as_bytes() {
+        Tag::RobustEdge(false)
+    } else if tag == vertigo::VERTEX_SWITCH.as_bytes() {
+        Tag::SwitchVertex
+    } else if tag == vertigo::EDGE_SWITCH_PRIOR.as_bytes() {
+        Tag::SwitchPrior
     } else {
         Tag::Unknown
     }
@@ -145,6 +158,11 @@ pub(super) struct Block {
     /// (`LANDMARK2`, `POINT2`).
     pub(super) first_g2o_landmark: Option<FormTag>,
     pub(super) first_landmark2: Option<FormTag>,
+    /// Vertigo's edges: (position in `edges`, kind), and the line of the first Vertigo line.
+    pub(super) kinds: Vec<(usize, EdgeKind)>,
+    pub(super) switches: Vec<SwitchVertex>,
+    pub(super) priors: Vec<SwitchPrior>,
+    pub(super) first_vertigo_line: Option<usize>,
 }
 
 /// Parses the lines of one block.
@@ -323,6 +341,28 @@ impl BlockParser<'_> {
             Tag::LandmarkVertex(form) => self.landmark_vertex(line_no, line, fields, form),
             Tag::Observation(form) => self.observation(line_no, line, fields, form),
             Tag::Prior => Err(at_tag(ParseErrorKind::Prior { tag: tag_name() })),
+            Tag::RobustEdge(switchable) => self.robust_edge(line_no, line, fields, switchable),
+            Tag::SwitchVertex => {
+                let a = self.expect_fields(line_no, line, fields, 2, "id value")?;
+                let v = SwitchVertex {
+                    id: self.id(line_no, &a[0])?,
+                    value: self.num(line_no, &a[1])?,
+                };
+                self.block.switches.push(v);
+                self.block.first_vertigo_line.get_or_insert(line_no);
+                Ok(())
+            }
+            Tag::SwitchPrior => {
+                let a = self.expect_fields(line_no, line, fields, 3, "id prior information")?;
+                let p = SwitchPrior {
+                    id: self.id(line_no, &a[0])?,
+                    prior: self.num(line_no, &a[1])?,
+                    information: self.num(line_no, &a[2])?,
+                };
+                self.block.priors.push(p);
+                self.block.first_vertigo_line.get_or_insert(line_no);
+                Ok(())
+            }
             Tag::Unknown => {
                 let name = tag_name();
                 if self.options.strict {
@@ -428,6 +468,49 @@ impl BlockParser<'_> {
         };
         let tag = &fields[0];
         self.record_edge(family, tag.text, tag.col, i, j, v, site)
+    }
+
+    /// `EDGE_SE2_SWITCHABLE i j s ...` or `EDGE_SE2_MAXMIX i j w ...`: an `EDGE_SE2` with one
+    /// more field after the ids.
+    fn robust_edge(
+        &mut self,
+        line_no: usize,
+        line: &[u8],
+        fields: &[Field],
+        switchable: bool,
+    ) -> Result<(), ParseError> {
+        let layout = if switchable {
+            "i j switch_id dx dy dtheta and 6 information values I11 I12 I13 I22 I23 I33"
+        } else {
+            "i j weight dx dy dtheta and 6 information values I11 I12 I13 I22 I23 I33"
+        };
+        let a = self.expect_fields(line_no, line, fields, 12, layout)?;
+        let i = self.id(line_no, &a[0])?;
+        let j = self.id(line_no, &a[1])?;
+        let kind = if switchable {
+            EdgeKind::Switchable {
+                switch: self.id(line_no, &a[2])?,
+            }
+        } else {
+            EdgeKind::MaxMix {
+                weight: self.num(line_no, &a[2])?,
+            }
+        };
+        let mut v = [0.0; 9];
+        for (x, f) in v.iter_mut().zip(&a[3..]) {
+            *x = self.num(line_no, f)?;
+        }
+        let site = EdgeSite {
+            line: narrow(line_no),
+            col_i: narrow(a[0].col),
+            col_j: narrow(a[1].col),
+            col_noise: narrow(a[6].col),
+        };
+        let tag = &fields[0];
+        self.record_edge(Family::G2o, tag.text, tag.col, i, j, v, site)?;
+        self.block.kinds.push((self.block.edges.len() - 1, kind));
+        self.block.first_vertigo_line.get_or_insert(line_no);
+        Ok(())
     }
 
     #[inline(always)]

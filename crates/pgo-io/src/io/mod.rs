@@ -20,7 +20,7 @@ pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
 pub use writer::{
     Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_atomic,
-    write_path,
+    write_path, write_path_with,
 };
 
 use crate::graph::NoiseKind;

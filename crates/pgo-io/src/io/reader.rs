@@ -24,6 +24,11 @@ pub struct ReadReport {
     pub warnings: Vec<Warning>,
     /// Number of lines read.
     pub lines: usize,
+    /// The line of each edge of the graph, in its order (1-based).
+    pub edge_lines: Vec<usize>,
+    /// Vertigo's switchable and max-mixture lines, if the file has any (their edges are in the
+    /// graph as plain loop closures).
+    pub vertigo: Option<crate::vertigo::Vertigo>,
 }
 
 /// Reads a pose graph from a file path, or from stdin when `path` is `-`.
@@ -210,6 +215,14 @@ impl<'o> Reader<'o> {
             return Err(self.error(b.line, b.col, mixed_tags(a, &b.tag)));
         }
         let acc = &mut self.acc;
+        let offset = acc.edges.len();
+        acc.kinds
+            .extend(b.kinds.into_iter().map(|(k, kind)| (k + offset, kind)));
+        extend(&mut acc.switches, b.switches);
+        extend(&mut acc.priors, b.priors);
+        if acc.first_vertigo_line.is_none() {
+            acc.first_vertigo_line = b.first_vertigo_line;
+        }
         extend(&mut acc.vertices, b.vertices);
         extend(&mut acc.edges, b.edges);
         extend(&mut acc.sites, b.sites);
@@ -331,6 +344,7 @@ impl<'o> Reader<'o> {
                 ),
             ));
         }
+        let vertigo = self.vertigo(edges.len(), &mut warnings);
         warnings.sort_by_key(|w| w.location.line);
 
         let landmarks_declared = !self.acc.landmarks.is_empty();
@@ -361,6 +375,8 @@ impl<'o> Reader<'o> {
             dialect_reason,
             warnings,
             lines: self.lines,
+            edge_lines: self.acc.sites.iter().map(|s| s.line as usize).collect(),
+            vertigo,
         };
         Ok((graph, report))
     }
@@ -386,6 +402,33 @@ impl<'o> Reader<'o> {
                 },
             ),
         }
+    }
+
+    /// Vertigo's lines, with a warning saying how they are read.
+    fn vertigo(
+        &mut self,
+        edges: usize,
+        warnings: &mut Vec<Warning>,
+    ) -> Option<crate::vertigo::Vertigo> {
+        let first = self.acc.first_vertigo_line?;
+        let mut v = crate::vertigo::Vertigo {
+            kinds: vec![crate::vertigo::EdgeKind::Plain; edges],
+            switches: std::mem::take(&mut self.acc.switches),
+            priors: std::mem::take(&mut self.acc.priors),
+        };
+        for &(k, kind) in &self.acc.kinds {
+            v.kinds[k] = kind;
+        }
+        let (switchable, maxmix) = v.counts();
+        warnings.push(self.warning(
+            first,
+            format!(
+                "Vertigo's robust edges (first here): {switchable} EDGE_SE2_SWITCHABLE and {maxmix} EDGE_SE2_MAXMIX read as plain loop closures (candidates for --robust), {} VERTEX_SWITCH and {} EDGE_SWITCH_PRIOR lines not used; all are written back to g2o output",
+                v.switches.len(),
+                v.priors.len()
+            ),
+        ));
+        Some(v)
     }
 
     fn warning(&self, line: usize, message: String) -> Warning {

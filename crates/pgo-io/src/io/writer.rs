@@ -5,6 +5,7 @@
 use super::{Dialect, Format, g2o, toro};
 use crate::error::Error;
 use crate::graph::{LandmarkForm, PoseGraph};
+use crate::vertigo::{self, EdgeKind, Vertigo};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -29,15 +30,34 @@ pub fn format_f64(v: f64, out: &mut Vec<u8>) {
 
 /// Writes `graph` to `out`.
 pub fn write<W: Write>(graph: &PoseGraph, options: WriteOptions, out: W) -> crate::Result<()> {
-    write_named(graph, options, out, "<stdout>")
+    write_named(graph, None, options, out, "<stdout>")
 }
 
 fn write_named<W: Write>(
     graph: &PoseGraph,
+    vertigo: Option<&Vertigo>,
     options: WriteOptions,
     mut out: W,
     name: &str,
 ) -> crate::Result<()> {
+    if let Some(v) = vertigo {
+        if options.format != Format::G2o {
+            let (switchable, maxmix) = v.counts();
+            return Err(Error::Invalid(format!(
+                "the graph has Vertigo's robust lines ({switchable} EDGE_SE2_SWITCHABLE, {maxmix} EDGE_SE2_MAXMIX, {} VERTEX_SWITCH, {} EDGE_SWITCH_PRIOR), which {} has no form for: write g2o",
+                v.switches.len(),
+                v.priors.len(),
+                options.format
+            )));
+        }
+        if v.kinds.len() != graph.edges.len() {
+            return Err(Error::Invalid(format!(
+                "{} edge kinds for {} edges",
+                v.kinds.len(),
+                graph.edges.len()
+            )));
+        }
+    }
     if options.dialect.noise() != graph.noise {
         return Err(Error::Invalid(format!(
             "cannot write {:?} matrices in dialect {}",
@@ -90,9 +110,39 @@ fn write_named<W: Write>(
         buf.push(b'\n');
         put(&mut buf, &mut out)?;
     }
-    for e in &graph.edges {
-        buf.extend_from_slice(edge_tag.as_bytes());
-        let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+    for s in vertigo.map_or(&[][..], |v| &v.switches) {
+        let _ = write!(buf, "{} {} ", vertigo::VERTEX_SWITCH, s.id);
+        format_f64(s.value, &mut buf);
+        buf.push(b'\n');
+        put(&mut buf, &mut out)?;
+    }
+    for (k, e) in graph.edges.iter().enumerate() {
+        let kind = vertigo.map_or(EdgeKind::Plain, |v| v.kinds[k]);
+        match kind {
+            EdgeKind::Plain => {
+                buf.extend_from_slice(edge_tag.as_bytes());
+                let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+            }
+            EdgeKind::Switchable { switch } => {
+                let _ = write!(
+                    buf,
+                    "{} {} {} {switch}",
+                    vertigo::EDGE_SWITCHABLE,
+                    graph.ids[e.i],
+                    graph.ids[e.j]
+                );
+            }
+            EdgeKind::MaxMix { weight } => {
+                let _ = write!(
+                    buf,
+                    "{} {} {} ",
+                    vertigo::EDGE_MAXMIX,
+                    graph.ids[e.i],
+                    graph.ids[e.j]
+                );
+                format_f64(weight, &mut buf);
+            }
+        }
         let noise = if options.dialect.toro_order() {
             e.noise.to_toro()
         } else {
@@ -112,6 +162,14 @@ fn write_named<W: Write>(
             buf.push(b' ');
             format_f64(v, &mut buf);
         }
+        buf.push(b'\n');
+        put(&mut buf, &mut out)?;
+    }
+    for p in vertigo.map_or(&[][..], |v| &v.priors) {
+        let _ = write!(buf, "{} {} ", vertigo::EDGE_SWITCH_PRIOR, p.id);
+        format_f64(p.prior, &mut buf);
+        buf.push(b' ');
+        format_f64(p.information, &mut buf);
         buf.push(b'\n');
         put(&mut buf, &mut out)?;
     }
@@ -246,7 +304,20 @@ pub fn check_output(path: &str) -> crate::Result<()> {
 /// [`remove_temporary_files`] (a tool's interrupt handler). Errors name `path`, never the
 /// temporary file.
 pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate::Result<()> {
-    write_atomic(path, |out, name| write_named(graph, options, out, name))
+    write_path_with(graph, None, options, path)
+}
+
+/// [`write_path`] with Vertigo's lines of the graph (g2o only: its switch variables after the
+/// pose vertices, each edge with its own tag, the switch priors after the edges).
+pub fn write_path_with(
+    graph: &PoseGraph,
+    vertigo: Option<&Vertigo>,
+    options: WriteOptions,
+    path: &str,
+) -> crate::Result<()> {
+    write_atomic(path, |out, name| {
+        write_named(graph, vertigo, options, out, name)
+    })
 }
 
 /// Writes a file the way [`write_path`] does, whatever it holds: `write(out, name)` writes to
