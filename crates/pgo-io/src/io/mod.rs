@@ -12,17 +12,69 @@ pub mod g2o;
 pub mod lexer;
 mod options;
 mod reader;
+pub mod reader3;
 pub mod toro;
 mod writer;
 
 pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
+pub use reader3::read3;
 pub use writer::{
     Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_path,
+    write3, write3_path,
 };
 
-use crate::graph::NoiseKind;
+use crate::error::ParseErrorKind;
+use crate::graph::{NoiseKind, PoseGraph};
+use crate::graph3::Graph3;
 use std::fmt;
+use std::io::Read;
+
+/// A graph of either dimension, as [`read_any`] and [`read_any_path`] return it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyGraph {
+    /// A planar graph, read exactly as [`read`] reads it.
+    Planar(PoseGraph),
+    /// A 3D graph ([`read3`]).
+    Spatial(Graph3),
+}
+
+/// Reads a planar or a 3D graph from a path (stdin for `-`): the planar reader first, exactly
+/// as [`read_path`] (so planar files give the same graph, warnings and errors); if it stops at a
+/// 3D tag ([`ParseErrorKind::ThreeD`]), the whole input is read again by [`read3`].
+pub fn read_any_path(path: &str, options: &ReadOptions) -> crate::Result<(AnyGraph, ReadReport)> {
+    if path == "-" {
+        let mut bytes = Vec::new();
+        std::io::stdin()
+            .lock()
+            .read_to_end(&mut bytes)
+            .map_err(|e| crate::Error::io("<stdin>", e))?;
+        return read_any(&bytes, "<stdin>", options);
+    }
+    match read_path(path, options) {
+        Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
+            let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
+            let (graph, report) = read3(&bytes, path, options)?;
+            Ok((AnyGraph::Spatial(graph), report))
+        }
+        other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
+
+/// [`read_any_path`] on bytes in memory; `name` is the path used in messages.
+pub fn read_any(
+    bytes: &[u8],
+    name: &str,
+    options: &ReadOptions,
+) -> crate::Result<(AnyGraph, ReadReport)> {
+    match read(bytes, name, options) {
+        Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
+            let (graph, report) = read3(bytes, name, options)?;
+            Ok((AnyGraph::Spatial(graph), report))
+        }
+        other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
 
 /// A file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
