@@ -19,16 +19,21 @@ Examples:
   cat M3500.g2o | pgo-convert - --reindex --to g2o -o M3500-dense.g2o
   pgo-convert w20000.txt --dialect g2o -o w20000.g2o   EDGE2 tags, g2o-order information
   pgo-convert cityTrees10000.g2o --landmarks g2o -o trees.g2o   LANDMARK2 -> VERTEX_XY/EDGE_SE2_XY
-  pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back";
+  pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back
+  pgo-convert --stats sphere2500.g2o            3D (VERTEX_SE3:QUAT, EDGE_SE3:QUAT): counts, dimension 3
+  pgo-convert parking-garage.g2o -o copy.g2o    3D, written back bit for bit";
 
-/// Convert planar pose graphs between g2o and TORO, losslessly, or report statistics.
+/// Convert pose graphs between g2o and TORO, losslessly, or report statistics.
 ///
 /// Reads g2o (VERTEX_SE2, EDGE_SE2, FIX) and TORO (VERTEX2/VERTEX, EDGE2/EDGE) files, checks every
 /// value, and writes the graph in either format: vertices sorted by id, edges in input order, FIX
 /// ids on one line at the end, every number in shortest round-trip form, so converting g2o -> TORO
 /// -> g2o gives back every value bit for bit. Files without vertex lines get initial poses
-/// composed along a spanning tree from the smallest id. Errors are reported as PATH:LINE:COL:
-/// message with exit status 2; an output file is replaced only once completely written.
+/// composed along a spanning tree from the smallest id. 3D files (g2o VERTEX_SE3:QUAT and
+/// EDGE_SE3:QUAT, TORO VERTEX3 and EDGE3) are read and written back in their own form, bit for
+/// bit; g2o and TORO 3D are not converted into each other (quaternions against Euler angles: not
+/// lossless). Errors are reported as PATH:LINE:COL: message with exit status 2; an output file is
+/// replaced only once completely written.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-convert", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {

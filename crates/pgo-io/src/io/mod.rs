@@ -1,4 +1,6 @@
-//! Reading and writing planar pose graphs in the g2o and TORO text formats, losslessly.
+//! Reading and writing pose graphs in the g2o and TORO text formats, losslessly: planar ones
+//! ([`read`], [`write`]) and 3D ones ([`read3`], [`write3`], docs/formats.md §10), and either
+//! ([`read_any_path`]).
 //!
 //! How the established tools read and write these files, quirks included, is recorded in
 //! `docs/formats.md`; this module follows its §7 recommendations: lenient about layout (comments, blank
