@@ -296,3 +296,37 @@ fn the_solving_tools_refuse_3d_files_with_a_specific_message() {
         assert!(!output.exists());
     }
 }
+
+#[test]
+fn pgo_convert_round_trips_toro_3d_and_reads_3d_on_stdin() {
+    let dir = Dir::new();
+    // Written as pgo writes: shortest numbers, single spaces, vertices by id.
+    let toro = "VERTEX3 0 0 0 0 0 0 0\nVERTEX3 1 1 0 0 0.1 -0.2 4\nEDGE3 0 1 1 0 0 0.1 -0.2 4 100 0 0 0 0 0 100 0 0 0 0 100 0 0 0 25 0 0 25 0 25\nFIX 0\n";
+    let input = dir.file("in.graph", toro.as_bytes());
+    let out = dir.path("out.graph");
+    let run = Command::new(bin("pgo-convert"))
+        .args([s(&input), "-o", s(&out), "--quiet"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), toro);
+    // To g2o: refused, nothing written.
+    let g2o = dir.path("out.g2o");
+    let run = Command::new(bin("pgo-convert"))
+        .args([s(&input), "-o", s(&g2o)])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(!g2o.exists());
+    // A covariance dialect does not apply to 3D files.
+    let run = Command::new(bin("pgo-convert"))
+        .args([s(&input), "--dialect", "toro-cov", "-o", s(&out)])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(text(&run.stderr).contains("does not apply to a 3D file"));
+    // On stdin, the tags decide: the same bytes as from the file.
+    let run = common::run_with_stdin("pgo-convert", &["-", "--quiet"], Some(toro.as_bytes()));
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    assert_eq!(text(&run.stdout), toro);
+}
