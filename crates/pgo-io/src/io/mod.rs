@@ -46,12 +46,27 @@ pub enum AnyGraph {
 /// 3D tag ([`ParseErrorKind::ThreeD`]), the whole input is read again by [`read3`].
 pub fn read_any_path(path: &str, options: &ReadOptions) -> crate::Result<(AnyGraph, ReadReport)> {
     if path == "-" {
-        let mut bytes = Vec::new();
-        std::io::stdin()
-            .lock()
-            .read_to_end(&mut bytes)
-            .map_err(|e| crate::Error::io("<stdin>", e))?;
-        return read_any(&bytes, "<stdin>", options);
+        // stdin is read once: the planar reader streams it as before, and a copy of what it
+        // consumed is kept (up to TEE_MAX bytes) for the 3D reader, which reads that and the rest.
+        let stdin = std::io::stdin();
+        let mut tee = Tee {
+            inner: stdin.lock(),
+            kept: Vec::new(),
+            complete: true,
+        };
+        return match read(&mut tee, "<stdin>", options) {
+            Err(crate::Error::Parse(e))
+                if matches!(e.kind, ParseErrorKind::ThreeD { .. }) && tee.complete =>
+            {
+                let mut bytes = std::mem::take(&mut tee.kept);
+                tee.inner
+                    .read_to_end(&mut bytes)
+                    .map_err(|e| crate::Error::io("<stdin>", e))?;
+                let (graph, report) = read3(&bytes, "<stdin>", options)?;
+                Ok((AnyGraph::Spatial(graph), report))
+            }
+            other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+        };
     }
     match read_path(path, options) {
         Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
@@ -60,6 +75,34 @@ pub fn read_any_path(path: &str, options: &ReadOptions) -> crate::Result<(AnyGra
             Ok((AnyGraph::Spatial(graph), report))
         }
         other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
+
+/// Bytes of stdin kept for the 3D reader while the planar reader streams it. Beyond this the
+/// copy is dropped (memory stays bounded for planar input): a 3D tag that far into stdin (after
+/// 64 MB of other lines) is reported as the planar reader's error.
+const TEE_MAX: usize = 64 << 20;
+
+/// A reader that keeps a copy of what it reads, up to [`TEE_MAX`] bytes.
+struct Tee<R> {
+    inner: R,
+    kept: Vec<u8>,
+    /// Whether `kept` holds everything read so far.
+    complete: bool,
+}
+
+impl<R: Read> Read for Tee<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if self.complete {
+            if self.kept.len() + n <= TEE_MAX {
+                self.kept.extend_from_slice(&buf[..n]);
+            } else {
+                self.complete = false;
+                self.kept = Vec::new();
+            }
+        }
+        Ok(n)
     }
 }
 
