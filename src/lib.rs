@@ -64,7 +64,7 @@ pub mod viz;
 
 /// The file layer (crate `pgo-io`): the pose graph as read, the g2o/TORO readers and writers,
 /// statistics.
-pub use pgo_io::{graph, io, stats, vertigo};
+pub use pgo_io::{graph, graph3, io, stats, vertigo};
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};

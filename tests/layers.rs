@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 
 /// The floors of ARCHITECTURE.md, bottom first: a room may use only rooms on lower floors.
 const FLOORS: &[&[&str]] = &[
-    // The file layer (the pgo-io crate, re-exported as crate::graph, io and stats) and the leaves.
-    &["graph", "progress", "vertigo"],
+    // The file layer (pgo-io, re-exported as crate::graph, graph3, io, stats and vertigo) and the
+    // leaves.
+    &["graph", "graph3", "progress", "vertigo"],
     &["error"],
     &["io"],
     &["stats"],

@@ -21,16 +21,22 @@ Examples:
   pgo-convert w20000.txt --dialect g2o -o w20000.g2o   EDGE2 tags, g2o-order information
   pgo-convert cityTrees10000.g2o --landmarks g2o -o trees.g2o   LANDMARK2 -> VERTEX_XY/EDGE_SE2_XY
   pgo-convert trees.g2o --landmarks landmark2 --landmark-offset 10000 -o back.g2o   and back
-  pgo-convert intel-opt.g2o --to tum -o intel-opt.tum   the poses as a TUM trajectory for evo";
+  pgo-convert intel-opt.g2o --to tum -o intel-opt.tum   the poses as a TUM trajectory for evo
 
-/// Convert planar pose graphs between g2o and TORO, losslessly, or report statistics.
+  pgo-convert --stats sphere2500.g2o            3D (VERTEX_SE3:QUAT, EDGE_SE3:QUAT): counts, dimension 3
+  pgo-convert parking-garage.g2o -o copy.g2o    3D, written back bit for bit";
+
+/// Convert pose graphs between g2o and TORO, losslessly, or report statistics.
 ///
 /// Reads g2o (VERTEX_SE2, EDGE_SE2, FIX) and TORO (VERTEX2/VERTEX, EDGE2/EDGE) files, checks every
 /// value, and writes the graph in either format: vertices sorted by id, edges in input order, FIX
 /// ids on one line at the end, every number in shortest round-trip form, so converting g2o -> TORO
 /// -> g2o gives back every value bit for bit. Files without vertex lines get initial poses
-/// composed along a spanning tree from the smallest id. Errors are reported as PATH:LINE:COL:
-/// message with exit status 2; an output file is replaced only once completely written.
+/// composed along a spanning tree from the smallest id. 3D files (g2o VERTEX_SE3:QUAT and
+/// EDGE_SE3:QUAT, TORO VERTEX3 and EDGE3) are read and written back in their own form, bit for
+/// bit; g2o and TORO 3D are not converted into each other (quaternions against Euler angles: not
+/// lossless). Errors are reported as PATH:LINE:COL: message with exit status 2; an output file is
+/// replaced only once completely written.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-convert", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -189,8 +195,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let progress = Progress::start("pgo-convert", args.quiet, args.progress);
     progress.phase(&format!("reading {}", display_name(&args.input, "<stdin>")));
     let t0 = Instant::now();
-    let (mut graph, report) = io::read_path(&args.input, &options)?;
+    let (graph, report) = io::read_any_path(&args.input, &options)?;
     let read_s = t0.elapsed().as_secs_f64();
+    let mut graph = match graph {
+        io::AnyGraph::Planar(graph) => graph,
+        io::AnyGraph::Spatial(graph) => {
+            return run3(args, graph, report, read_s, progress, rec);
+        }
+    };
     progress.suspend(|| crate::cli::print_warnings(&report.warnings));
     rec.graph(&graph);
 
@@ -350,6 +362,148 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     }
     rec.finish()?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The rest of [`run`] for a 3D graph: statistics, or the graph written back in its own form.
+fn run3(
+    args: &Args,
+    mut graph: crate::graph3::Graph3,
+    report: io::ReadReport,
+    read_s: f64,
+    progress: Progress,
+    rec: crate::viz::Recorder,
+) -> crate::Result<ExitCode> {
+    progress.suspend(|| crate::cli::print_warnings(&report.warnings));
+    let rerun = &args.rerun;
+    if rerun.rerun_save.is_some() || rerun.rerun_connect.is_some() || rerun.rerun_spawn {
+        return Err(Error::Invalid(
+            "--rerun-save, --rerun-connect, --rerun-spawn: 3D graphs are not recorded yet".into(),
+        ));
+    }
+    if args.landmarks.is_some() {
+        return Err(Error::Invalid(
+            "--landmarks: this 3D graph has no landmarks".into(),
+        ));
+    }
+    let input = display_name(&args.input, "<stdin>");
+    if args.stats {
+        progress.finish();
+        let stats = crate::stats::GraphStats3::new(&graph, &report);
+        let text = if args.json {
+            to_json_line(&stats)?
+        } else {
+            stats3_text(&input, &stats, &report)
+        };
+        write_stdout(text.as_bytes())?;
+        if args.timings {
+            eprintln!("timings: read_s={read_s:.6} write_s=0");
+        }
+        rec.finish()?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    if let Some(t) = args.to.filter(|t| t.trajectory_format().is_some()) {
+        return Err(Error::Invalid(format!(
+            "--to {}: 3D trajectories are not written yet (planar graphs only)",
+            t.trajectory_format().map_or("", |f| f.name())
+        )));
+    }
+    let format = args
+        .to
+        .and_then(Target::graph_format)
+        .or_else(|| Format::from_extension(&args.output))
+        .unwrap_or(report.format);
+    let dialect = format.default_dialect();
+    if let Some(d) = args.to_dialect
+        && d != dialect
+    {
+        return Err(Error::Invalid(format!(
+            "--to-dialect {d}: a 3D {format} file holds information matrices, the upper triangle row by row (dialect {dialect})"
+        )));
+    }
+    if args.reindex {
+        graph.reindex();
+    }
+    let t1 = Instant::now();
+    progress.phase(&format!(
+        "writing {}",
+        display_name(&args.output, "<stdout>")
+    ));
+    io::write3_path(&graph, format, &args.output)?;
+    let write_s = t1.elapsed().as_secs_f64();
+    progress.finish();
+    if !args.quiet {
+        eprintln!(
+            "pgo-convert: {input}: {} poses, {} edges, 3D; format {} ({}), dialect {} ({}) -> {}: format {format}, dialect {dialect}",
+            graph.num_poses(),
+            graph.edges.len(),
+            report.format,
+            report.format_reason,
+            report.dialect,
+            report.dialect_reason,
+            display_name(&args.output, "<stdout>")
+        );
+    }
+    if args.timings {
+        eprintln!("timings: read_s={read_s:.6} write_s={write_s:.6}");
+    }
+    rec.finish()?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The human-readable statistics of a 3D graph, laid out as [`stats_text`]'s.
+fn stats3_text(name: &str, s: &crate::stats::GraphStats3, report: &io::ReadReport) -> String {
+    let opt = |v: Option<u32>| v.map_or("-".to_string(), |v| v.to_string());
+    let fixed = if s.fixed.is_empty() {
+        "none".to_string()
+    } else {
+        s.fixed
+            .iter()
+            .map(|id| id.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let rotations = match s.rotations {
+        crate::graph3::Form3::G2o => "quaternions (qx qy qz qw)",
+        crate::graph3::Form3::Toro => "Euler angles (roll pitch yaw)",
+    };
+    let rows = [
+        ("file", name.to_string()),
+        ("dimension", "3 (SE(3) poses)".to_string()),
+        ("format", format!("{} ({})", s.format, report.format_reason)),
+        (
+            "dialect",
+            format!("{} ({})", s.dialect, report.dialect_reason),
+        ),
+        ("rotations", rotations.to_string()),
+        ("poses", s.poses.to_string()),
+        ("edges", s.edges.to_string()),
+        (
+            "odometry edges",
+            format!("{} (j = i + 1)", s.odometry_edges),
+        ),
+        ("loop closures", s.loop_closures.to_string()),
+        ("backward edges", format!("{} (i > j)", s.backward_edges)),
+        (
+            "duplicate edges",
+            format!(
+                "{} (same pair as an earlier edge; {} identical in every value)",
+                s.duplicate_edges, s.exact_duplicate_edges
+            ),
+        ),
+        ("components", s.components.to_string()),
+        ("isolated poses", s.isolated_poses.to_string()),
+        (
+            "id range",
+            format!("{} .. {}", opt(s.id_min), opt(s.id_max)),
+        ),
+        ("id gaps", s.id_gaps.to_string()),
+        ("fixed", fixed),
+    ];
+    let mut out = String::new();
+    for (k, v) in rows {
+        out.push_str(&format!("{:<17}{v}\n", format!("{k}:")));
+    }
+    out
 }
 
 fn display_name(path: &str, stdio: &str) -> String {

@@ -53,8 +53,38 @@ pub enum ParseErrorKind {
         dialect: &'static str,
         hint: &'static str,
     },
-    #[error("3D pose graphs are not supported (tag {tag}): pgo handles planar SE(2) graphs")]
+    #[error(
+        "3D pose graph (tag {tag}): 3D solving is not yet supported; this tool handles planar SE(2) graphs (pgo-convert reads, writes and describes 3D files)"
+    )]
     ThreeD { tag: String },
+    #[error(
+        "this 3D type is not supported (tag {tag}): pgo reads 3D pose graphs as g2o's VERTEX_SE3:QUAT and EDGE_SE3:QUAT or TORO's VERTEX3 and EDGE3"
+    )]
+    Unsupported3D { tag: String },
+    #[error(
+        "planar and 3D tags in one file ({first} at line {first_line}, {tag} here): a file is a planar or a 3D pose graph, not both"
+    )]
+    MixedDimensions {
+        first: String,
+        first_line: usize,
+        tag: String,
+    },
+    #[error(
+        "3D lines of both forms in one file ({first} at line {first_line}, {tag} here): g2o's quaternions and TORO's Euler angles parametrize rotations, and their information, differently"
+    )]
+    Mixed3dForms {
+        first: String,
+        first_line: usize,
+        tag: String,
+    },
+    #[error(
+        "the {block} block of the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass --allow-indefinite to accept it"
+    )]
+    BlockNotPositiveDefinite { block: &'static str, pivot: usize },
+    #[error(
+        "the quaternion (qx qy qz qw) cannot be normalized (its norm is zero, or the sum of its squares underflows to zero or overflows): the rotation is q / |q|, as g2o reads it"
+    )]
+    BadQuaternion,
     #[error(
         "this landmark type is not supported (tag {tag}): pgo reads landmarks as g2o's VERTEX_XY and EDGE_SE2_XY (position observations) and CPL-SLAM's LANDMARK2"
     )]

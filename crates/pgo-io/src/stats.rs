@@ -136,3 +136,108 @@ fn duplicates(graph: &PoseGraph) -> (usize, usize) {
     }
     (same_pair, exact)
 }
+
+/// Counts that describe a 3D graph file (`pgo-convert --stats` on VERTEX_SE3:QUAT/EDGE_SE3:QUAT
+/// or VERTEX3/EDGE3 files). Field names are stable `--json` keys, those shared with
+/// [`GraphStats`] meaning the same.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GraphStats3 {
+    /// Always 3 (planar statistics have no such key).
+    pub dimension: u32,
+    pub format: Format,
+    pub dialect: Dialect,
+    /// How rotations are written: `g2o` (quaternions) or `toro` (Euler angles).
+    pub rotations: crate::graph3::Form3,
+    pub poses: usize,
+    pub edges: usize,
+    /// Edges with j = i + 1.
+    pub odometry_edges: usize,
+    /// All other edges.
+    pub loop_closures: usize,
+    /// Edges written with i > j.
+    pub backward_edges: usize,
+    /// Edges joining the same two poses (either direction) as an earlier edge.
+    pub duplicate_edges: usize,
+    /// Edges identical in every value (ids, measurement, information) to an earlier edge.
+    pub exact_duplicate_edges: usize,
+    /// Connected components, isolated poses included.
+    pub components: usize,
+    /// Poses without edges.
+    pub isolated_poses: usize,
+    pub id_min: Option<VertexId>,
+    pub id_max: Option<VertexId>,
+    /// Ids missing from `id_min..=id_max`.
+    pub id_gaps: u64,
+    /// Ids on FIX lines.
+    pub fixed: Vec<VertexId>,
+}
+
+impl GraphStats3 {
+    pub fn new(graph: &crate::graph3::Graph3, report: &ReadReport) -> Self {
+        let ids = &graph.ids;
+        let (mut odometry, mut backward) = (0, 0);
+        let mut degree = vec![0usize; ids.len()];
+        for e in &graph.edges {
+            let (a, b) = (ids[e.i], ids[e.j]);
+            if u64::from(b) == u64::from(a) + 1 {
+                odometry += 1;
+            }
+            if a > b {
+                backward += 1;
+            }
+            degree[e.i] += 1;
+            degree[e.j] += 1;
+        }
+        let pair = |k: usize| {
+            let e = &graph.edges[k];
+            (e.i.min(e.j), e.i.max(e.j))
+        };
+        let bits = |k: usize| -> Vec<u64> {
+            let e = &graph.edges[k];
+            e.measurement
+                .values()
+                .chain(e.information.0)
+                .map(f64::to_bits)
+                .collect()
+        };
+        let mut order: Vec<usize> = (0..graph.edges.len()).collect();
+        order.sort_unstable_by_key(|&k| (pair(k), k));
+        let (mut duplicate, mut exact) = (0, 0);
+        for group in order.chunk_by(|&a, &b| pair(a) == pair(b)) {
+            duplicate += group.len() - 1;
+            for (n, &k) in group.iter().enumerate().skip(1) {
+                let same = |&earlier: &usize| {
+                    let (e, f) = (&graph.edges[earlier], &graph.edges[k]);
+                    (e.i, e.j) == (f.i, f.j) && bits(earlier) == bits(k)
+                };
+                if group[..n].iter().any(same) {
+                    exact += 1;
+                }
+            }
+        }
+        let (_, components) = graph.connected_components();
+        let (id_min, id_max) = (ids.first().copied(), ids.last().copied());
+        GraphStats3 {
+            dimension: 3,
+            format: report.format,
+            dialect: report.dialect,
+            rotations: graph.form,
+            poses: ids.len(),
+            edges: graph.edges.len(),
+            odometry_edges: odometry,
+            loop_closures: graph.edges.len() - odometry,
+            backward_edges: backward,
+            duplicate_edges: duplicate,
+            exact_duplicate_edges: exact,
+            components,
+            isolated_poses: degree.iter().filter(|&&d| d == 0).count(),
+            id_min,
+            id_max,
+            id_gaps: match (id_min, id_max) {
+                (Some(lo), Some(hi)) => u64::from(hi - lo) + 1 - ids.len() as u64,
+                _ => 0,
+            },
+            fixed: graph.fixed.iter().map(|&k| ids[k]).collect(),
+        }
+    }
+}

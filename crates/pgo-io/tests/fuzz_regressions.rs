@@ -44,3 +44,18 @@ fn every_fuzz_regression_input_passes_its_targets_checks() {
     }
     assert!(count > 0, "no regression inputs in {}", root.display());
 }
+
+/// The fuzzers' seeds (`fuzz/seeds/`, planar and 3D) pass the same checks, under every name.
+#[test]
+fn every_fuzz_seed_passes_the_reader_checks() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let data = std::fs::read(entry.unwrap().path()).unwrap();
+        for (_, name) in TARGETS {
+            oracle::check_reader(&data, name);
+        }
+        count += 1;
+    }
+    assert!(count >= 9, "{count} seeds");
+}

@@ -1,4 +1,6 @@
-//! Reading and writing planar pose graphs in the g2o and TORO text formats, losslessly.
+//! Reading and writing pose graphs in the g2o and TORO text formats, losslessly: planar ones
+//! ([`read`], [`write`]) and 3D ones ([`read3`], [`write3`], docs/formats.md §10), and either
+//! ([`read_any_path`]).
 //!
 //! How the established tools read and write these files, quirks included, is recorded in
 //! `docs/formats.md`; this module follows its §7 recommendations: lenient about layout (comments, blank
@@ -12,19 +14,113 @@ pub mod g2o;
 pub mod lexer;
 mod options;
 mod reader;
+pub mod reader3;
 pub mod toro;
 pub mod trajectory;
 mod writer;
 
 pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
+pub use reader3::read3;
 pub use writer::{
     Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_atomic,
-    write_path, write_path_with,
+    write_path, write_path_with, write3, write3_path,
 };
 
-use crate::graph::NoiseKind;
+use crate::error::ParseErrorKind;
+use crate::graph::{NoiseKind, PoseGraph};
+use crate::graph3::Graph3;
 use std::fmt;
+use std::io::Read;
+
+/// A graph of either dimension, as [`read_any`] and [`read_any_path`] return it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyGraph {
+    /// A planar graph, read exactly as [`read`] reads it.
+    Planar(PoseGraph),
+    /// A 3D graph ([`read3`]).
+    Spatial(Graph3),
+}
+
+/// Reads a planar or a 3D graph from a path (stdin for `-`): the planar reader first, exactly
+/// as [`read_path`] (so planar files give the same graph, warnings and errors); if it stops at a
+/// 3D tag ([`ParseErrorKind::ThreeD`]), the whole input is read again by [`read3`].
+pub fn read_any_path(path: &str, options: &ReadOptions) -> crate::Result<(AnyGraph, ReadReport)> {
+    if path == "-" {
+        // stdin is read once: the planar reader streams it as before, and a copy of what it
+        // consumed is kept (up to TEE_MAX bytes) for the 3D reader, which reads that and the rest.
+        let stdin = std::io::stdin();
+        let mut tee = Tee {
+            inner: stdin.lock(),
+            kept: Vec::new(),
+            complete: true,
+        };
+        return match read(&mut tee, "<stdin>", options) {
+            Err(crate::Error::Parse(e))
+                if matches!(e.kind, ParseErrorKind::ThreeD { .. }) && tee.complete =>
+            {
+                let mut bytes = std::mem::take(&mut tee.kept);
+                tee.inner
+                    .read_to_end(&mut bytes)
+                    .map_err(|e| crate::Error::io("<stdin>", e))?;
+                let (graph, report) = read3(&bytes, "<stdin>", options)?;
+                Ok((AnyGraph::Spatial(graph), report))
+            }
+            other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+        };
+    }
+    match read_path(path, options) {
+        Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
+            let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
+            let (graph, report) = read3(&bytes, path, options)?;
+            Ok((AnyGraph::Spatial(graph), report))
+        }
+        other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
+
+/// Bytes of stdin kept for the 3D reader while the planar reader streams it. Beyond this the
+/// copy is dropped (memory stays bounded for planar input): a 3D tag that far into stdin (after
+/// 64 MB of other lines) is reported as the planar reader's error.
+const TEE_MAX: usize = 64 << 20;
+
+/// A reader that keeps a copy of what it reads, up to [`TEE_MAX`] bytes.
+struct Tee<R> {
+    inner: R,
+    kept: Vec<u8>,
+    /// Whether `kept` holds everything read so far.
+    complete: bool,
+}
+
+impl<R: Read> Read for Tee<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if self.complete {
+            if self.kept.len() + n <= TEE_MAX {
+                self.kept.extend_from_slice(&buf[..n]);
+            } else {
+                self.complete = false;
+                self.kept = Vec::new();
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// [`read_any_path`] on bytes in memory; `name` is the path used in messages.
+pub fn read_any(
+    bytes: &[u8],
+    name: &str,
+    options: &ReadOptions,
+) -> crate::Result<(AnyGraph, ReadReport)> {
+    match read(bytes, name, options) {
+        Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
+            let (graph, report) = read3(bytes, name, options)?;
+            Ok((AnyGraph::Spatial(graph), report))
+        }
+        other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
 
 /// A file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

@@ -24,7 +24,8 @@ pub struct ReadReport {
     pub warnings: Vec<Warning>,
     /// Number of lines read.
     pub lines: usize,
-    /// The line of each edge of the graph, in its order (1-based).
+    /// The line of each edge of the graph, in its order (1-based; planar graphs only, empty for
+    /// a 3D graph).
     pub edge_lines: Vec<usize>,
     /// Vertigo's switchable and max-mixture lines, if the file has any (their edges are in the
     /// graph as plain loop closures).

@@ -2,9 +2,10 @@
 //! ones included; edges in input order; the FIX ids as one line at the end, where GTSAM's reader
 //! tolerates it (docs/formats.md §5.6); every float in shortest round-trip form, never NaN or inf.
 
-use super::{Dialect, Format, g2o, toro};
+use super::{Dialect, Format, g2o, reader3, toro};
 use crate::error::Error;
 use crate::graph::{LandmarkForm, PoseGraph};
+use crate::graph3::{Form3, Graph3};
 use crate::vertigo::{self, EdgeKind, Vertigo};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -320,6 +321,12 @@ pub fn write_path_with(
     })
 }
 
+/// [`write_path`] for a 3D graph: the same temporary file and rename, the lines of
+/// [`write3`].
+pub fn write3_path(graph: &Graph3, format: Format, path: &str) -> crate::Result<()> {
+    write_atomic(path, |out, name| write3_named(graph, format, out, name))
+}
+
 /// Writes a file the way [`write_path`] does, whatever it holds: `write(out, name)` writes to
 /// `out` (stdout for `-`, a device or FIFO in place, else a temporary file renamed over `path`
 /// once complete and listed for [`remove_temporary_files`]), `name` being what its errors call
@@ -359,6 +366,102 @@ pub fn write_atomic(
     write(&mut std::io::BufWriter::new(tmp.as_file()), path)?;
     set_default_permissions(tmp.path()).map_err(io)?;
     tmp.persist(target).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// Writes a 3D graph to `out` in `format`, which must be the graph's form (quaternions are
+/// written as g2o `VERTEX_SE3:QUAT`/`EDGE_SE3:QUAT`, Euler angles as TORO `VERTEX3`/`EDGE3`;
+/// converting one into the other would change values, and the information matrix's rotation
+/// coordinates, so it is refused): vertices sorted by id, edges in input order, the 21
+/// information values in the file's order, FIX ids on one line at the end, every number in
+/// shortest round-trip form, so the file read back gives every value bit for bit.
+pub fn write3<W: Write>(graph: &Graph3, format: Format, mut out: W) -> crate::Result<()> {
+    write3_named(graph, format, &mut out, "<stdout>")
+}
+
+fn write3_named(
+    graph: &Graph3,
+    format: Format,
+    out: &mut dyn Write,
+    name: &str,
+) -> crate::Result<()> {
+    let (vertex_tag, edge_tag) = match (format, graph.form) {
+        (Format::G2o, Form3::G2o) => (reader3::G2O_VERTEX, reader3::G2O_EDGE),
+        (Format::Toro, Form3::Toro) => (reader3::TORO_VERTEX, reader3::TORO_EDGE),
+        (Format::Toro, Form3::G2o) => {
+            return Err(Error::Invalid(
+                "a 3D g2o graph (quaternions) cannot be written as TORO (VERTEX3/EDGE3, Euler angles) without loss: the angles would be computed, not copied, and the information matrices are over other rotation coordinates (qx qy qz against roll pitch yaw); write it as g2o".into(),
+            ));
+        }
+        (Format::G2o, Form3::Toro) => {
+            return Err(Error::Invalid(
+                "a 3D TORO graph (Euler angles) cannot be written as g2o (VERTEX_SE3:QUAT/EDGE_SE3:QUAT, quaternions) without loss: the quaternions would be computed, not copied, and the information matrices are over other rotation coordinates (roll pitch yaw against qx qy qz); write it as TORO".into(),
+            ));
+        }
+    };
+    check_finite3(graph)?;
+    let io = |e| Error::io(name, e);
+    let mut buf: Vec<u8> = Vec::with_capacity(1 << 16);
+    let mut put = |buf: &mut Vec<u8>, last: bool| -> crate::Result<()> {
+        if last || buf.len() >= 1 << 16 {
+            out.write_all(buf).map_err(io)?;
+            buf.clear();
+        }
+        Ok(())
+    };
+    for (id, pose) in graph.ids.iter().zip(&graph.poses) {
+        buf.extend_from_slice(vertex_tag.as_bytes());
+        let _ = write!(buf, " {id}");
+        for v in pose.values() {
+            buf.push(b' ');
+            format_f64(v, &mut buf);
+        }
+        buf.push(b'\n');
+        put(&mut buf, false)?;
+    }
+    for e in &graph.edges {
+        buf.extend_from_slice(edge_tag.as_bytes());
+        let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+        for v in e.measurement.values().chain(e.information.0) {
+            buf.push(b' ');
+            format_f64(v, &mut buf);
+        }
+        buf.push(b'\n');
+        put(&mut buf, false)?;
+    }
+    if !graph.fixed.is_empty() {
+        buf.extend_from_slice(g2o::FIX.as_bytes());
+        for &k in &graph.fixed {
+            let _ = write!(buf, " {}", graph.ids[k]);
+        }
+        buf.push(b'\n');
+    }
+    put(&mut buf, true)?;
+    out.flush().map_err(io)
+}
+
+fn check_finite3(graph: &Graph3) -> crate::Result<()> {
+    if let Some(k) = graph
+        .poses
+        .iter()
+        .position(|p| !p.values().all(f64::is_finite))
+    {
+        return Err(Error::Invalid(format!(
+            "pose of vertex {} is not finite and cannot be written",
+            graph.ids[k]
+        )));
+    }
+    if let Some(e) = graph.edges.iter().find(|e| {
+        !e.measurement
+            .values()
+            .chain(e.information.0)
+            .all(f64::is_finite)
+    }) {
+        return Err(Error::Invalid(format!(
+            "edge {} -> {} holds a value that is not finite and cannot be written",
+            graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
     Ok(())
 }
 

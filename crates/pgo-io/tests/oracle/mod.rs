@@ -4,14 +4,15 @@
 //!
 //! - [`check_reader`]: reading never panics; an error names a line and column inside the input;
 //!   a graph that was read is written in both formats and read back identically, bit for bit
-//!   (the writer's promise), and its statistics never panic.
+//!   (the writer's promise), and its statistics never panic. The same for 3D graphs
+//!   ([`io::read_any`]), written back in their own form.
 //!
 //! The checks of the solve path (fuzz target `solve`, in the root package's `fuzz/`) are in the
 //! root's `tests/oracle/mod.rs`.
 #![allow(dead_code)]
 
-use pgo_io::io::{self, Dialect, Format, ReadOptions, WriteOptions};
-use pgo_io::{NoiseKind, PoseGraph};
+use pgo_io::io::{self, AnyGraph, Dialect, Format, ReadOptions, WriteOptions};
+use pgo_io::{Graph3, NoiseKind, PoseGraph};
 
 /// Every way the readers are asked to read in the fuzz targets.
 pub fn reader_options() -> Vec<ReadOptions> {
@@ -54,24 +55,90 @@ pub fn check_reader(data: &[u8], name: &str) {
                 let _ = pgo_io::stats::GraphStats::new(&graph, &report);
                 round_trip(&graph, &options);
             }
-            Err(pgo_io::Error::Parse(e)) => {
-                let text = e.to_string();
-                let prefix = format!("{name}:{}:{}: ", e.location.line, e.location.col);
-                assert!(text.starts_with(&prefix), "{text}");
-                let line = e.location.line;
-                assert!(line >= 1 && line <= line_count(data).max(1), "{text}");
-                let content = data
-                    .split(|&c| c == b'\n')
-                    .nth(line - 1)
-                    .unwrap_or_default();
-                assert!(
-                    e.location.col >= 1 && e.location.col <= content.len() + 1,
-                    "{text}: column outside line {line} ({} bytes)",
-                    content.len()
-                );
+            Err(pgo_io::Error::Parse(e)) => check_location(data, name, &e),
+            Err(e) => panic!("reading from memory failed without a location: {e}"),
+        }
+        match io::read_any(data, name, &options) {
+            Ok((AnyGraph::Spatial(graph), report)) => {
+                assert_eq!(report.lines, line_count(data), "lines counted");
+                for w in &report.warnings {
+                    assert!(w.location.line >= 1 && w.location.line <= report.lines.max(1));
+                }
+                check_graph3(&graph, &options);
+                let _ = pgo_io::GraphStats3::new(&graph, &report);
+            }
+            Ok((AnyGraph::Planar(_), _)) => {}
+            Err(pgo_io::Error::Parse(e)) => check_location(data, name, &e),
+            // A covariance (or the other form's) dialect asked of a 3D file.
+            Err(pgo_io::Error::Invalid(msg)) if options.dialect.is_some() => {
+                assert!(msg.contains("does not apply to a 3D file"), "{msg}");
             }
             Err(e) => panic!("reading from memory failed without a location: {e}"),
         }
+    }
+}
+
+/// An error names `name`, a line of the input and a column inside it (or just past its end).
+fn check_location(data: &[u8], name: &str, e: &pgo_io::ParseError) {
+    let text = e.to_string();
+    let prefix = format!("{name}:{}:{}: ", e.location.line, e.location.col);
+    assert!(text.starts_with(&prefix), "{text}");
+    let line = e.location.line;
+    assert!(line >= 1 && line <= line_count(data).max(1), "{text}");
+    let content = data
+        .split(|&c| c == b'\n')
+        .nth(line - 1)
+        .unwrap_or_default();
+    assert!(
+        e.location.col >= 1 && e.location.col <= content.len() + 1,
+        "{text}: column outside line {line} ({} bytes)",
+        content.len()
+    );
+}
+
+/// A 3D graph's invariants, and its round trip in its own form: the same graph, bit for bit.
+fn check_graph3(g: &Graph3, read_with: &ReadOptions) {
+    assert_eq!(g.ids.len(), g.poses.len());
+    assert!(g.ids.windows(2).all(|w| w[0] < w[1]), "ids ascending");
+    for e in &g.edges {
+        assert!(e.i < g.num_poses() && e.j < g.num_poses() && e.i != e.j);
+    }
+    assert!(g.fixed.iter().all(|&k| k < g.num_poses()));
+    let format = match g.form {
+        pgo_io::Form3::G2o => Format::G2o,
+        pgo_io::Form3::Toro => Format::Toro,
+    };
+    let mut out = Vec::new();
+    io::write3(g, format, &mut out).unwrap_or_else(|e| panic!("writing a 3D graph read: {e}"));
+    let options = ReadOptions {
+        strict: true,
+        allow_indefinite: read_with.allow_indefinite,
+        ..Default::default()
+    };
+    match io::read_any(&out[..], "written", &options) {
+        Ok((AnyGraph::Spatial(back), _)) => {
+            let bits3 = |g: &Graph3| -> Vec<u64> {
+                g.poses
+                    .iter()
+                    .flat_map(|p| p.values())
+                    .chain(
+                        g.edges
+                            .iter()
+                            .flat_map(|e| e.measurement.values().chain(e.information.0)),
+                    )
+                    .map(f64::to_bits)
+                    .collect()
+            };
+            assert_eq!(
+                (&back.ids, &back.fixed, back.form),
+                (&g.ids, &g.fixed, g.form)
+            );
+            assert_eq!(bits3(&back), bits3(g));
+        }
+        other => panic!(
+            "pgo cannot read back the 3D graph it wrote: {other:?}\n{}",
+            String::from_utf8_lossy(&out)
+        ),
     }
 }
 
