@@ -18,7 +18,8 @@ mod writer;
 pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
 pub use writer::{
-    Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write, write_path,
+    Pending, WriteOptions, check_output, format_f64, remove_temporary_files, write,
+    write_bytes_path, write_path,
 };
 
 use crate::graph::NoiseKind;

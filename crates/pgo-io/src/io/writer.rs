@@ -280,6 +280,38 @@ pub fn write_path(graph: &PoseGraph, options: WriteOptions, path: &str) -> crate
     Ok(())
 }
 
+/// Writes `bytes` to the file `path` as [`write_path`] writes a graph: through a listed
+/// temporary file in the same directory renamed over `path` once complete (a device or FIFO is
+/// written in place). For the side outputs of the tools (e.g. marginal covariances).
+pub fn write_bytes_path(bytes: &[u8], path: &str) -> crate::Result<()> {
+    let target = Path::new(path);
+    if let Ok(meta) = std::fs::metadata(target)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(target)
+            .map_err(|e| Error::io(path, e))?;
+        return file.write_all(bytes).map_err(|e| Error::io(path, e));
+    }
+    if target.is_dir() {
+        return Err(Error::Invalid(format!("{path}: is a directory")));
+    }
+    let io = |e| Error::io(path, without_path(e));
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".pgo-")
+        .suffix(".tmp")
+        .tempfile_in(directory_of(target))
+        .map_err(io)?;
+    let _listed = Pending::list(tmp.path());
+    tmp.write_all(bytes).map_err(io)?;
+    tmp.as_file().flush().map_err(io)?;
+    set_default_permissions(tmp.path()).map_err(io)?;
+    tmp.persist(target).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
 /// The temporary files being written now, for [`remove_temporary_files`].
 static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
