@@ -130,6 +130,9 @@ pub struct Timings {
     pub read_s: f64,
     pub solve_s: f64,
     pub write_s: f64,
+    /// With --marginals: computing and writing them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub marginals_s: Option<f64>,
 }
 
 /// The report `--json` prints: the solution's figures, which estimate is written, the reader's
@@ -245,6 +248,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
         None => Ok(()),
     };
+    let write_s = t2.elapsed().as_secs_f64();
+    let t3 = Instant::now();
     let marginals = match &args.marginals {
         Some(path) => {
             progress.phase("marginal covariances");
@@ -252,7 +257,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
         None => Ok(()),
     };
-    let write_s = t2.elapsed().as_secs_f64();
+    let marginals_s = args.marginals.is_some().then(|| t3.elapsed().as_secs_f64());
     progress.finish();
 
     let report = Report::new(
@@ -262,6 +267,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             read_s,
             solve_s,
             write_s,
+            marginals_s,
         }),
     );
     if let Some(solver) = args.solver
@@ -491,8 +497,13 @@ fn text_report(input: &str, report: &Report) -> String {
         out += &row(
             "time",
             format!(
-                "read {:.3} s, solve {:.3} s, write {:.3} s",
-                t.read_s, t.solve_s, t.write_s
+                "read {:.3} s, solve {:.3} s, write {:.3} s{}",
+                t.read_s,
+                t.solve_s,
+                t.write_s,
+                t.marginals_s
+                    .map(|m| format!(", marginals {m:.3} s"))
+                    .unwrap_or_default()
             ),
         );
     }
