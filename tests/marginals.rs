@@ -21,7 +21,12 @@ fn solve(args: &[&str], threads: &str) -> Output {
 fn read(path: &Path) -> Vec<(u64, [f64; 6])> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
-    assert!(lines.next().unwrap().starts_with("# id c11 c12 c13 c22 c23 c33"));
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("# id c11 c12 c13 c22 c23 c33")
+    );
     lines
         .map(|l| {
             let t: Vec<&str> = l.split(' ').collect();
@@ -71,10 +76,9 @@ fn mit_marginals_are_covariances_by_id_and_thread_independent() {
 fn a_fix_pose_is_the_held_one() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("fix.g2o");
-    let mut text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/MIT.g2o"),
-    )
-    .unwrap();
+    let mut text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/MIT.g2o"))
+            .unwrap();
     text.push_str("FIX 100\n");
     std::fs::write(&input, text).unwrap();
     let out = dir.path().join("cov.txt");
