@@ -262,11 +262,15 @@ impl SparseInverse {
                 for u in t + 1..k {
                     let ru = z.rows[s + u];
                     // Rows r_u > r_t of column j are rows of column r_t (a clique of the filled
-                    // graph), ascending: search forward from the last hit.
-                    let p = lo
-                        + z.rows[lo..ce]
+                    // graph), ascending: search forward from the last hit, which is mostly the
+                    // next row (within a supernode the structures coincide).
+                    let p = if lo < ce && z.rows[lo] == ru {
+                        lo
+                    } else {
+                        lo + z.rows[lo..ce]
                             .binary_search(&ru)
-                            .expect("column j's rows below r_t are in column r_t");
+                            .expect("column j's rows below r_t are in column r_t")
+                    };
                     lo = p + 1;
                     let zv = z.values[p];
                     acc[t] += lt[s + u] * zv;
