@@ -53,7 +53,7 @@
 
 use super::levenberg_marquardt::gauge;
 use crate::graph::{Pose2, PoseGraph, SymMat3};
-use crate::linalg::factor::{Assembly, SparseFactor};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor};
 use crate::simulate::wrap_angle;
 use thiserror::Error;
 
@@ -97,6 +97,16 @@ type Mat3 = [[f64; 3]; 3];
 /// A wrong number of poses, indices out of range, non-finite poses, measurements or information
 /// matrices, a singular covariance, landmarks, or an H that is not numerically positive definite.
 pub fn marginals(graph: &PoseGraph, poses: &[Pose2]) -> Result<Vec<SymMat3>, MarginalsError> {
+    marginals_with(graph, poses, Layout::Auto)
+}
+
+/// [`marginals`] with the factor stored as `layout` (`Auto`: faer's choice after AMD; the others
+/// in the identity order, for the tests of both storages).
+fn marginals_with(
+    graph: &PoseGraph,
+    poses: &[Pose2],
+    layout: Layout,
+) -> Result<Vec<SymMat3>, MarginalsError> {
     let n = graph.num_poses();
     if !graph.landmarks.observations.is_empty() || !graph.landmarks.is_empty() {
         return Err(MarginalsError::Landmarks);
@@ -195,7 +205,13 @@ pub fn marginals(graph: &PoseGraph, poses: &[Pose2]) -> Result<Vec<SymMat3>, Mar
     }
     let mut h = Assembly::new(dim, &entries);
     h.fill(&values);
-    let mut factor = SparseFactor::<f64>::analyze(h.matrix.symbolic());
+    let mut factor = match layout {
+        Layout::Auto => SparseFactor::<f64>::analyze(h.matrix.symbolic()),
+        _ => {
+            let identity: Vec<usize> = (0..dim).collect();
+            SparseFactor::analyze_ordered(h.matrix.symbolic(), &identity, layout)
+        }
+    };
     factor
         .llt(h.matrix.as_ref())
         .map_err(|_| MarginalsError::NotPositiveDefinite)?;
@@ -571,9 +587,10 @@ mod tests {
     #[test]
     fn sparse_inverse_subset_equals_the_dense_inverse() {
         let mut rng = Rng(11);
-        for (n, fixed) in [(25, vec![]), (40, vec![7usize, 30])] {
+        // The last: dense enough for faer's supernodal layout (dense blocks of columns).
+        for (n, fixed, loops) in [(25, vec![], 1), (40, vec![7usize, 30], 1), (150, vec![], 6)] {
             let truth = random_poses(n, &mut rng);
-            let extra: Vec<(usize, usize)> = (0..n)
+            let extra: Vec<(usize, usize)> = (0..loops * n)
                 .map(|_| {
                     let i = (rng.next() * n as f64) as usize % n;
                     let j = (rng.next() * n as f64) as usize % n;
@@ -615,28 +632,30 @@ mod tests {
                 }
             }
             let inv = dense_inverse(h);
-            let m = marginals(&g, &poses).unwrap();
-            for k in 0..n {
-                if at[k] == usize::MAX {
-                    assert_eq!(m[k].0, [0.0; 6]);
-                    continue;
-                }
-                let o = 3 * at[k];
-                let want = [
-                    inv[o][o],
-                    inv[o][o + 1],
-                    inv[o][o + 2],
-                    inv[o + 1][o + 1],
-                    inv[o + 1][o + 2],
-                    inv[o + 2][o + 2],
-                ];
-                let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                for (a, b) in m[k].0.iter().zip(want) {
-                    assert!(
-                        (a - b).abs() <= 1e-11 * scale,
-                        "pose {k}: {:?} {want:?}",
-                        m[k]
-                    );
+            for layout in [Layout::Auto, Layout::Simplicial, Layout::Supernodal] {
+                let m = marginals_with(&g, &poses, layout).unwrap();
+                for k in 0..n {
+                    if at[k] == usize::MAX {
+                        assert_eq!(m[k].0, [0.0; 6]);
+                        continue;
+                    }
+                    let o = 3 * at[k];
+                    let want = [
+                        inv[o][o],
+                        inv[o][o + 1],
+                        inv[o][o + 2],
+                        inv[o + 1][o + 1],
+                        inv[o + 1][o + 2],
+                        inv[o + 2][o + 2],
+                    ];
+                    let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    for (a, b) in m[k].0.iter().zip(want) {
+                        assert!(
+                            (a - b).abs() <= 1e-11 * scale,
+                            "{layout:?} pose {k}: {:?} {want:?}",
+                            m[k]
+                        );
+                    }
                 }
             }
         }
