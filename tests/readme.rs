@@ -570,7 +570,7 @@ fn json_reports_are_documented() {
         (
             "pgo-solve",
             &[
-                (mit, "--refine -o /dev/null"),
+                (mit, "--refine -o /dev/null --marginals /dev/null"),
                 (mit, "--method staircase --refine"),
                 (warning, "--no-timings"),
                 (toy, "--weights unit"),

@@ -38,6 +38,7 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--robust=[Robust estimation against false loop closures by graduated non-convexity with this loss (tls\: truncated least squares, gm\: Geman-McClure); see Robust below]:LOSS:((tls\:"Truncated least squares\: rho(r) = min(r^2, c^2)"
 gm\:"Geman-McClure\: rho(r) = c^2 r^2 / (c^2 + r^2)"))' \
 '--inlier-threshold=[With --robust\: the inlier threshold c^2 on r_e^2 \[default\: 0.5 * chi2inv(0.99, 3) = 5.672, GTSAM'\''s\]]:C2:_default' \
+'--marginals=[With --refine\: write each pose'\''s marginal covariance at the refined estimate here, one line per pose sorted by id, \`id c11 c12 c13 c22 c23 c33\` (the upper triangle over GTSAM'\''s Pose2 tangent \[x, y, theta\], body frame, right Expmap), after a \`#\` comment line; the inverse of J^T Omega J over GTSAM'\''s BetweenFactor<Pose2> Jacobians and the files'\'' information matrices, the held poses (FIX, else each component'\''s first) zero. What GTSAM'\''s Marginals gives with a tight prior on the held poses. Graphs with landmarks are refused]:OUT:_default' \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \

@@ -131,6 +131,15 @@ pub struct Args {
     #[arg(long, requires = "robust")]
     pub drop_outliers: bool,
 
+    /// With --refine: write each pose's marginal covariance at the refined estimate here, one
+    /// line per pose sorted by id, `id c11 c12 c13 c22 c23 c33` (the upper triangle over GTSAM's
+    /// Pose2 tangent [x, y, theta], body frame, right Expmap), after a `#` comment line; the
+    /// inverse of J^T Omega J over GTSAM's BetweenFactor<Pose2> Jacobians and the files'
+    /// information matrices, the held poses (FIX, else each component's first) zero. What GTSAM's
+    /// Marginals gives with a tight prior on the held poses. Graphs with landmarks are refused
+    #[arg(long, value_name = "OUT", requires = "refine")]
+    pub marginals: Option<String>,
+
     /// Exit with status 1 when the result is not certified within --tol (the estimate is still
     /// written); without it, status 0 either way
     #[arg(long)]
@@ -167,6 +176,9 @@ pub struct Timings {
     pub read_s: f64,
     pub solve_s: f64,
     pub write_s: f64,
+    /// With --marginals: computing and writing them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub marginals_s: Option<f64>,
 }
 
 /// The report `--json` prints: the solution's figures, which estimate is written, the reader's
@@ -315,12 +327,25 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if let Some(path) = output {
         io::check_output(path)?;
     }
+    if let Some(path) = &args.marginals {
+        if path == "-" {
+            return Err(Error::Invalid(
+                "--marginals needs a file: stdout carries the graph or the report".into(),
+            ));
+        }
+        io::check_output(path)?;
+    }
     let rec = args.rerun.recorder("pgo-solve")?;
     let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
     let (mut graph, mut read_report) = args.input.read_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
     rec.graph(&graph);
+    if args.marginals.is_some() && !graph.landmarks.is_empty() {
+        return Err(Error::Invalid(
+            "--marginals: marginal covariances of graphs with landmarks are not implemented".into(),
+        ));
+    }
     if args.method == Method::Sdp {
         check_dense_size(&graph, "pgo-solve --method sdp")?;
     }
@@ -386,6 +411,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         None => Ok(()),
     };
     let write_s = t2.elapsed().as_secs_f64();
+    let t3 = Instant::now();
+    let marginals = match &args.marginals {
+        Some(path) => {
+            progress.phase("marginal covariances");
+            write_marginals(&graph, path)
+        }
+        None => Ok(()),
+    };
+    let marginals_s = args.marginals.is_some().then(|| t3.elapsed().as_secs_f64());
     progress.finish();
 
     let report = Report::new(
@@ -396,6 +430,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             read_s,
             solve_s,
             write_s,
+            marginals_s,
         }),
     );
     if let Some(solver) = args.solver
@@ -421,6 +456,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     });
     rec.finish()?;
     written?;
+    marginals?;
     Ok(if args.fail_uncertified && !solution.certified {
         ExitCode::from(1)
     } else {
@@ -456,6 +492,29 @@ fn method_text(r: &Solution) -> String {
         Method::Auto => format!("auto: {ran}"),
         _ => ran,
     }
+}
+
+/// Writes the marginal covariances of `graph`'s poses ([`crate::refine::marginals`]) to `path`:
+/// a `#` line naming the columns, then per pose in ascending id order `id c11 c12 c13 c22 c23
+/// c33`, shortest round-trip decimals.
+fn write_marginals(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result<()> {
+    let covariances = crate::refine::marginals(graph, &graph.poses)?;
+    let mut order: Vec<usize> = (0..graph.num_poses()).collect();
+    order.sort_by_key(|&k| graph.ids[k]);
+    let mut text = Vec::with_capacity(32 + 64 * order.len());
+    text.extend_from_slice(
+        b"# id c11 c12 c13 c22 c23 c33: covariance over the body-frame tangent [x, y, theta]\n",
+    );
+    for k in order {
+        text.extend_from_slice(graph.ids[k].to_string().as_bytes());
+        for &v in &covariances[k].0 {
+            text.push(b' ');
+            io::format_f64(v, &mut text);
+        }
+        text.push(b'\n');
+    }
+    io::write_bytes_path(&text, path)?;
+    Ok(())
 }
 
 /// Writes the solved graph to `path` in `format`.
@@ -609,8 +668,13 @@ fn text_report(input: &str, report: &Report) -> String {
         out += &row(
             "time",
             format!(
-                "read {:.3} s, solve {:.3} s, write {:.3} s",
-                t.read_s, t.solve_s, t.write_s
+                "read {:.3} s, solve {:.3} s, write {:.3} s{}",
+                t.read_s,
+                t.solve_s,
+                t.write_s,
+                t.marginals_s
+                    .map(|m| format!(", marginals {m:.3} s"))
+                    .unwrap_or_default()
             ),
         );
     }

@@ -328,8 +328,35 @@ impl<T: Scalar> SparseFactor<T> {
     /// factorization's (permuted) order: `rows[0] = j` holds the pivot d_j and the rest L's
     /// entries below it (L has a unit diagonal, not stored as such), at consecutive indices of the
     /// factor's values from `first`.
-    fn visit_ldlt_columns(&self, mut f: impl FnMut(usize, &[usize], usize)) {
+    fn visit_ldlt_columns(&self, f: impl FnMut(usize, &[usize], usize)) {
         assert_eq!(self.state, State::Ldlt);
+        self.visit_columns(f);
+    }
+
+    /// Calls `f(j, rows, values)` for every column j of the last LLᴴ's factor L, in the
+    /// factorization's (permuted) order ([`Self::order`]): `rows[0] = j` and `values[0]` is
+    /// l_jj, the rest L's entries below the diagonal, rows ascending. What a sparse inverse
+    /// subset (Takahashi's recurrence) reads.
+    ///
+    /// # Panics
+    ///
+    /// Without a successful LLᴴ before.
+    pub fn visit_llt_columns(&self, mut f: impl FnMut(usize, &[usize], &[T])) {
+        assert_eq!(self.state, State::Llt);
+        self.visit_columns(|j, rows, first| f(j, rows, &self.values[first..first + rows.len()]));
+    }
+
+    /// The fill-reducing order of the analysis, `order[new] = old` (the factor is that of
+    /// P A Pᵀ with (P A Pᵀ)_{kl} = A_{order[k], order[l]}); the identity when there is none.
+    pub fn order(&self) -> Vec<usize> {
+        match self.symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..self.dim()).collect(),
+        }
+    }
+
+    /// Column by column, for either factorization (same storage).
+    fn visit_columns(&self, mut f: impl FnMut(usize, &[usize], usize)) {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let (cp, ri) = (s.col_ptr(), s.row_idx());

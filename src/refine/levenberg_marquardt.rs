@@ -394,8 +394,9 @@ fn validate(graph: &PoseGraph, initial: &[Pose2]) -> Result<Vec<Factor>, RefineE
         .collect()
 }
 
-/// The held poses: the FIX poses, plus the first pose of every component without one.
-fn gauge(graph: &PoseGraph) -> Vec<usize> {
+/// The held poses of [`refine`] (its gauge): the FIX poses, plus the first pose of every
+/// component without one; dense indices, ascending.
+pub fn gauge(graph: &PoseGraph) -> Vec<usize> {
     let (label, count) = graph.connected_components();
     let mut anchored = vec![false; count];
     let mut held: Vec<usize> = graph.fixed.clone();

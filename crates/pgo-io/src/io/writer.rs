@@ -465,6 +465,17 @@ fn check_finite3(graph: &Graph3) -> crate::Result<()> {
     Ok(())
 }
 
+/// Writes `bytes` to the file `path` as [`write_path`] writes a graph ([`write_atomic`]): for the
+/// side outputs of the tools (e.g. marginal covariances).
+pub fn write_bytes_path(bytes: &[u8], path: &str) -> crate::Result<()> {
+    write_atomic(path, |out, name| {
+        out.write_all(bytes)
+            .and_then(|_| out.flush())
+            .map_err(|e| Error::io(name, e))
+    })?;
+    Ok(())
+}
+
 /// The temporary files being written now, for [`remove_temporary_files`].
 static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
