@@ -11,8 +11,8 @@ complete -c pgo-certify -l tol -d 'Relative suboptimality bound under which the 
 complete -c pgo-certify -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-certify -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-certify -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
-complete -c pgo-certify -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
-complete -c pgo-certify -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
+complete -c pgo-certify -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph is then the file\'s without them'
+complete -c pgo-certify -l allow-indefinite -d 'Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)'
 complete -c pgo-certify -l json -d 'Print the report as one JSON object on stdout'
 complete -c pgo-certify -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
 complete -c pgo-certify -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'

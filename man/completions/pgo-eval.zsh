@@ -15,16 +15,16 @@ _pgo-eval() {
 
     local context curcontext="$curcontext" state line
     _arguments "${_arguments_options[@]}" : \
-'--from=[Format of both files \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
+'--from=[Input format \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
-'--dialect=[How to read the six noise values of each edge (only checked here) \[default\: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags\]]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
+'--dialect=[How to read the six noise values of each edge \[default\: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags\]]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
 toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"
 toro-cov\:"Covariance, TORO order (GTSAM'\''s \`.graph\` files, read by \`load2D\` as covariances)"
 g2o-cov\:"Covariance, g2o order"))' \
 '--delta=[RPE\: the step between the poses of a pair, in matched poses]:D:_default' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
-'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file]' \
-'--allow-indefinite[Accept noise matrices that are not positive definite]' \
+'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph is then the file'\''s without them]' \
+'--allow-indefinite[Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)]' \
 '--all-pairs[RPE\: every pair (i, i + D), not only (0, D), (D, 2D), ...]' \
 '--no-align[Compare the positions as they are, without the SE(2) alignment]' \
 '--json[Print the report as one JSON object on stdout]' \

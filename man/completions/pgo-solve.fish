@@ -24,8 +24,8 @@ complete -c pgo-solve -l marginals -d 'With --refine: write each pose\'s margina
 complete -c pgo-solve -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-solve -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-solve -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
-complete -c pgo-solve -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
-complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
+complete -c pgo-solve -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph is then the file\'s without them'
+complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)'
 complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2) before writing it; the report\'s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)'
 complete -c pgo-solve -l all-edges-uncertain -d 'With --robust: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)'
 complete -c pgo-solve -l drop-outliers -d 'With --robust: write the estimate without the rejected edges (by default -o holds every edge as read)'

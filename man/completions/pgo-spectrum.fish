@@ -12,8 +12,8 @@ clarabel\t'clarabel on the real embedding of the Hermitian cone (cargo feature `
 complete -c pgo-spectrum -l rerun-save -d 'Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with `rerun PATH.rrd`' -r
 complete -c pgo-spectrum -l rerun-connect -d 'Stream the recording to a running rerun viewer, at URL if given [default: rerun+http://127.0.0.1:9876/proxy]; an unreachable viewer is a warning' -r
 complete -c pgo-spectrum -l strict -d 'Treat unknown tags as errors instead of skipping them with a warning'
-complete -c pgo-spectrum -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph solved is then the file\'s without them'
-complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (only with --weights unit)'
+complete -c pgo-spectrum -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file: the graph is then the file\'s without them'
+complete -c pgo-spectrum -l allow-indefinite -d 'Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)'
 complete -c pgo-spectrum -l json -d 'Print one JSON object on stdout'
 complete -c pgo-spectrum -s q -l quiet -d 'No progress display (shown on stderr only when stderr is a terminal)'
 complete -c pgo-spectrum -l progress -d 'Show the progress even when stderr is not a terminal, as plain lines (for logs)'

@@ -30,8 +30,8 @@ clarabel\:"clarabel on the real embedding of the Hermitian cone (cargo feature \
 '--rerun-save=[Write a rerun recording of the run to this .rrd file (poses, edges, residuals, solver iterations, eigenvalues, certificate); open it with \`rerun PATH.rrd\`]:PATH.rrd:_default' \
 '--rerun-connect=[Stream the recording to a running rerun viewer, at URL if given \[default\: rerun+http\://127.0.0.1\:9876/proxy\]; an unreachable viewer is a warning]::URL:_default' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
-'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph solved is then the file'\''s without them]' \
-'--allow-indefinite[Accept noise matrices that are not positive definite (only with --weights unit)]' \
+'(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph is then the file'\''s without them]' \
+'--allow-indefinite[Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)]' \
 '--json[Print one JSON object on stdout]' \
 '-q[No progress display (shown on stderr only when stderr is a terminal)]' \
 '--quiet[No progress display (shown on stderr only when stderr is a terminal)]' \

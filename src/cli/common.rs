@@ -15,6 +15,13 @@ pub struct InputArgs {
     #[arg(value_name = "IN")]
     pub input: String,
 
+    #[command(flatten)]
+    pub read: ReadFlags,
+}
+
+/// The reader's flags, shared by every tool that reads graph files.
+#[derive(Debug, Clone, Args)]
+pub struct ReadFlags {
     /// Input format [default: from the extension (.g2o, .graph), else from the tags]
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub from: Option<Format>,
@@ -29,13 +36,26 @@ pub struct InputArgs {
     pub strict: bool,
 
     /// Skip TORO's EQUIV lines (vertex merges, not implemented) with a warning instead of
-    /// refusing the file: the graph solved is then the file's without them
+    /// refusing the file: the graph is then the file's without them
     #[arg(long, conflicts_with = "strict")]
     pub ignore_equiv: bool,
 
-    /// Accept noise matrices that are not positive definite (only with --weights unit)
+    /// Accept noise matrices that are not positive definite (the solvers take them only with
+    /// --weights unit)
     #[arg(long)]
     pub allow_indefinite: bool,
+}
+
+impl ReadFlags {
+    pub fn options(&self) -> ReadOptions {
+        ReadOptions {
+            format: self.from,
+            dialect: self.dialect,
+            strict: self.strict,
+            ignore_equiv: self.ignore_equiv,
+            allow_indefinite: self.allow_indefinite,
+        }
+    }
 }
 
 impl InputArgs {
@@ -47,14 +67,7 @@ impl InputArgs {
     /// [`InputArgs::read`] as a phase of `progress`.
     pub fn read_shown(&self, progress: &Progress) -> crate::Result<(PoseGraph, ReadReport)> {
         progress.phase(&format!("reading {}", display_input(&self.input)));
-        let options = ReadOptions {
-            format: self.from,
-            dialect: self.dialect,
-            strict: self.strict,
-            ignore_equiv: self.ignore_equiv,
-            allow_indefinite: self.allow_indefinite,
-        };
-        let (graph, report) = io::read_path(&self.input, &options)?;
+        let (graph, report) = io::read_path(&self.input, &self.read.options())?;
         progress.suspend(|| crate::cli::print_warnings(&report.warnings));
         Ok((graph, report))
     }

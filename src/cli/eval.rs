@@ -1,13 +1,13 @@
 //! `pgo-eval`: the trajectory error of an estimate against a reference (evo's APE and RPE).
 
-use super::common::{num, to_json_line, write_stdout};
+use super::common::{ReadFlags, num, to_json_line, write_stdout};
 use crate::error::Error;
 use crate::eval::align::Alignment;
 use crate::eval::ape::{AbsoluteError, absolute_error};
 use crate::eval::rpe::{RelativeError, relative_error};
 use crate::eval::{Statistics, match_by_id};
 use crate::graph::PoseGraph;
-use crate::io::{self, Dialect, Format, ReadOptions};
+use crate::io;
 use clap::Parser;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -41,27 +41,8 @@ pub struct Args {
     #[arg(value_name = "REF")]
     pub reference: String,
 
-    /// Format of both files [default: from the extension (.g2o, .graph), else from the tags]
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    pub from: Option<Format>,
-
-    /// How to read the six noise values of each edge (only checked here) [default: g2o for
-    /// EDGE_SE2 tags, toro-info for EDGE2/EDGE tags]
-    #[arg(long, value_enum, value_name = "DIALECT")]
-    pub dialect: Option<Dialect>,
-
-    /// Treat unknown tags as errors instead of skipping them with a warning
-    #[arg(long)]
-    pub strict: bool,
-
-    /// Skip TORO's EQUIV lines (vertex merges, not implemented) with a warning instead of
-    /// refusing the file
-    #[arg(long, conflicts_with = "strict")]
-    pub ignore_equiv: bool,
-
-    /// Accept noise matrices that are not positive definite
-    #[arg(long)]
-    pub allow_indefinite: bool,
+    #[command(flatten)]
+    pub read: ReadFlags,
 
     /// RPE: the step between the poses of a pair, in matched poses
     #[arg(long, default_value = "1", value_name = "D", value_parser = clap::value_parser!(u32).range(1..))]
@@ -105,14 +86,7 @@ pub fn main() -> ExitCode {
 /// Reads a file of poses; a file without vertex lines has none to compare. Its warnings are
 /// printed unless `quiet` (the same file read a second time).
 fn read_poses(args: &Args, path: &str, quiet: bool) -> crate::Result<PoseGraph> {
-    let options = ReadOptions {
-        format: args.from,
-        dialect: args.dialect,
-        strict: args.strict,
-        ignore_equiv: args.ignore_equiv,
-        allow_indefinite: args.allow_indefinite,
-    };
-    let (graph, report) = io::read_path(path, &options)?;
+    let (graph, report) = io::read_path(path, &args.read.options())?;
     if !quiet {
         crate::cli::print_warnings(&report.warnings);
     }
