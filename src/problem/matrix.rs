@@ -15,7 +15,7 @@
 //! τ|Δ|² + κ at (r_i, r_i), κ at (r_j, r_j), −κR at (r_j, r_i), −κR̄ at (r_i, r_j); the rows of
 //! p_0 are dropped (anchoring).
 
-use crate::graph::{Edge, Pose2, PoseGraph};
+use crate::graph::{Edge, Observation, Pose2, PoseGraph};
 use crate::problem::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
@@ -291,12 +291,18 @@ pub fn cost(graph: &PoseGraph, weights: &[EdgeWeight], poses: &[Pose2]) -> f64 {
             .iter()
             .zip(&weights[graph.edges.len()..])
             .map(|(o, w)| {
-                let (a, l) = (poses[o.pose], poses[n + o.landmark]);
-                let t =
-                    c64::new(l.x - a.x, l.y - a.y) - rotation(a.theta) * c64::new(o.d[0], o.d[1]);
-                w.tau * t.norm_sqr()
+                let l = poses[n + o.landmark];
+                observation_cost(o, *w, poses[o.pose], [l.x, l.y])
             })
             .fold(0.0, |a, b| a + b)
+}
+
+/// The term of one landmark observation in the cost f: ν |l_k − p_i − r_i d_ik|² for the pose
+/// i it is seen from and the landmark position l_k (ν is the weight's `tau`).
+pub fn observation_cost(o: &Observation, w: EdgeWeight, pose: Pose2, landmark: [f64; 2]) -> f64 {
+    let t = c64::new(landmark[0] - pose.x, landmark[1] - pose.y)
+        - rotation(pose.theta) * c64::new(o.d[0], o.d[1]);
+    w.tau * t.norm_sqr()
 }
 
 /// The term of one edge in the cost f: τ |p_j − p_i − r_i Δ|² + κ |r_j − r_i R|² (the

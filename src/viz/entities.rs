@@ -191,13 +191,49 @@ pub fn landmark_residual_entity(
         .iter()
         .zip(&weights[graph.edges.len()..])
         .map(|(o, w)| {
-            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
-            let (s, c) = a.theta.sin_cos();
-            let ex = x - a.x - (c * o.d[0] - s * o.d[1]);
-            let ey = y - a.y - (s * o.d[0] + c * o.d[1]);
-            w.tau * (ex * ex + ey * ey)
+            crate::problem::matrix::observation_cost(
+                o,
+                *w,
+                graph.poses[o.pose],
+                marks.positions[o.landmark],
+            )
         })
         .collect();
+    let strips = marks
+        .observations
+        .iter()
+        .map(|o| {
+            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
+            [point(a.x, a.y), point(x, y)]
+        })
+        .collect();
+    let (poses, landmarks) = marks
+        .observations
+        .iter()
+        .map(|o| {
+            (
+                f64::from(graph.ids[o.pose]),
+                f64::from(marks.ids[o.landmark]),
+            )
+        })
+        .unzip();
+    colored_strips(
+        path,
+        strips,
+        residuals,
+        [("pose", poses), ("landmark", landmarks)],
+    )
+}
+
+/// Line strips colored by their residuals on the scale of [`residual_entity`] (logarithmic
+/// between the smallest positive and the largest), with the ids of their two ends and the
+/// residuals as values.
+fn colored_strips(
+    path: &str,
+    strips: Vec<[[f32; 2]; 2]>,
+    residuals: Vec<f64>,
+    ends: [(&'static str, Vec<f64>); 2],
+) -> Entity {
     let max = residuals.iter().copied().fold(0.0, f64::max);
     let min_positive = residuals
         .iter()
@@ -208,14 +244,7 @@ pub fn landmark_residual_entity(
         .iter()
         .map(|&r| scale_color(residual_position(r, min_positive, max)))
         .collect();
-    let strips = marks
-        .observations
-        .iter()
-        .map(|o| {
-            let (a, [x, y]) = (graph.poses[o.pose], marks.positions[o.landmark]);
-            [point(a.x, a.y), point(x, y)]
-        })
-        .collect();
+    let [(a, from), (b, to)] = ends;
     Entity::fixed(
         path,
         Item::Strips {
@@ -224,22 +253,8 @@ pub fn landmark_residual_entity(
             radius: RESIDUAL_LINE_RADIUS,
         },
     )
-    .with(
-        "pose",
-        marks
-            .observations
-            .iter()
-            .map(|o| f64::from(graph.ids[o.pose]))
-            .collect(),
-    )
-    .with(
-        "landmark",
-        marks
-            .observations
-            .iter()
-            .map(|o| f64::from(marks.ids[o.landmark]))
-            .collect(),
-    )
+    .with(a, from)
+    .with(b, to)
     .with("residual", residuals)
 }
 
@@ -304,16 +319,6 @@ pub fn residual_entity(
         .zip(weights)
         .map(|(e, w)| crate::problem::matrix::edge_cost(e, *w, &graph.poses))
         .collect();
-    let max = residuals.iter().copied().fold(0.0, f64::max);
-    let min_positive = residuals
-        .iter()
-        .copied()
-        .filter(|r| *r > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    let colors = residuals
-        .iter()
-        .map(|&r| scale_color(residual_position(r, min_positive, max)))
-        .collect();
     let strips = graph
         .edges
         .iter()
@@ -322,31 +327,12 @@ pub fn residual_entity(
             [point(a.x, a.y), point(b.x, b.y)]
         })
         .collect();
-    Entity::fixed(
-        path,
-        Item::Strips {
-            strips,
-            colors,
-            radius: RESIDUAL_LINE_RADIUS,
-        },
-    )
-    .with(
-        "from",
-        graph
-            .edges
-            .iter()
-            .map(|e| f64::from(graph.ids[e.i]))
-            .collect(),
-    )
-    .with(
-        "to",
-        graph
-            .edges
-            .iter()
-            .map(|e| f64::from(graph.ids[e.j]))
-            .collect(),
-    )
-    .with("residual", residuals)
+    let (from, to) = graph
+        .edges
+        .iter()
+        .map(|e| (f64::from(graph.ids[e.i]), f64::from(graph.ids[e.j])))
+        .unzip();
+    colored_strips(path, strips, residuals, [("from", from), ("to", to)])
 }
 
 fn flag(b: bool) -> f64 {

@@ -52,31 +52,24 @@ pub struct GraphStats {
 impl GraphStats {
     pub fn new(graph: &PoseGraph, report: &ReadReport) -> Self {
         let ids = &graph.ids;
-        let mut odometry = 0;
-        let mut backward = 0;
-        let mut degree = vec![0usize; ids.len()];
-        for e in &graph.edges {
-            let (a, b) = (ids[e.i], ids[e.j]);
-            if u64::from(b) == u64::from(a) + 1 {
-                odometry += 1;
-            }
-            if a > b {
-                backward += 1;
-            }
-            degree[e.i] += 1;
-            degree[e.j] += 1;
-        }
+        let ends: Vec<(usize, usize)> = graph.edges.iter().map(|e| (e.i, e.j)).collect();
+        let (odometry, backward, mut degree) = edge_counts(ids, &ends);
         for o in &graph.landmarks.observations {
             degree[o.pose] += 1;
         }
-        let (duplicate, exact_duplicate) = duplicates(graph);
+        let (duplicate, exact_duplicate) = duplicates(&ends, |k| {
+            let e = &graph.edges[k];
+            e.measurement
+                .values()
+                .iter()
+                .chain(&e.noise.0)
+                .map(|v| v.to_bits())
+                .collect()
+        });
         let (_, components) = graph.connected_components();
         let seen = graph.landmarks.observation_counts();
         let (id_min, id_max) = (ids.first().copied(), ids.last().copied());
-        let id_gaps = match (id_min, id_max) {
-            (Some(lo), Some(hi)) => u64::from(hi - lo) + 1 - ids.len() as u64,
-            _ => 0,
-        };
+        let id_gaps = id_gaps(ids);
         GraphStats {
             format: report.format,
             dialect: report.dialect,
@@ -104,27 +97,44 @@ impl GraphStats {
     }
 }
 
+/// Edges with j = i + 1 (odometry) and with i > j (backward), and the number of edges at each
+/// pose, from the edges' pose indices `ends` into the ascending `ids`.
+fn edge_counts(ids: &[VertexId], ends: &[(usize, usize)]) -> (usize, usize, Vec<usize>) {
+    let (mut odometry, mut backward) = (0, 0);
+    let mut degree = vec![0usize; ids.len()];
+    for &(i, j) in ends {
+        let (a, b) = (ids[i], ids[j]);
+        if u64::from(b) == u64::from(a) + 1 {
+            odometry += 1;
+        }
+        if a > b {
+            backward += 1;
+        }
+        degree[i] += 1;
+        degree[j] += 1;
+    }
+    (odometry, backward, degree)
+}
+
+/// Ids missing from `ids[0]..=ids[last]` (`ids` ascending).
+fn id_gaps(ids: &[VertexId]) -> u64 {
+    match (ids.first(), ids.last()) {
+        (Some(&lo), Some(&hi)) => u64::from(hi - lo) + 1 - ids.len() as u64,
+        _ => 0,
+    }
+}
+
 /// Edges joining the same two poses as an earlier edge, and edges identical in every value to an
-/// earlier one (a subset: identical edges join the same poses). Sorting by pose pair groups them.
-fn duplicates(graph: &PoseGraph) -> (usize, usize) {
+/// earlier one (a subset: identical edges join the same poses, the same way, with the same
+/// `bits` of their values). Sorting by pose pair groups them.
+fn duplicates(ends: &[(usize, usize)], bits: impl Fn(usize) -> Vec<u64>) -> (usize, usize) {
     let pair = |k: usize| {
-        let e = &graph.edges[k];
-        (e.i.min(e.j), e.i.max(e.j))
+        let (i, j) = ends[k];
+        (i.min(j), i.max(j))
     };
-    let mut order: Vec<usize> = (0..graph.edges.len()).collect();
+    let mut order: Vec<usize> = (0..ends.len()).collect();
     order.sort_unstable_by_key(|&k| (pair(k), k));
-    let identical = |a: usize, b: usize| {
-        let (e, f) = (&graph.edges[a], &graph.edges[b]);
-        let bits = |e: &crate::graph::Edge| -> Vec<u64> {
-            e.measurement
-                .values()
-                .iter()
-                .chain(&e.noise.0)
-                .map(|v| v.to_bits())
-                .collect()
-        };
-        (e.i, e.j) == (f.i, f.j) && bits(e) == bits(f)
-    };
+    let identical = |a: usize, b: usize| ends[a] == ends[b] && bits(a) == bits(b);
     let (mut same_pair, mut exact) = (0, 0);
     for group in order.chunk_by(|&a, &b| pair(a) == pair(b)) {
         same_pair += group.len() - 1;
@@ -175,46 +185,16 @@ pub struct GraphStats3 {
 impl GraphStats3 {
     pub fn new(graph: &crate::graph3::Graph3, report: &ReadReport) -> Self {
         let ids = &graph.ids;
-        let (mut odometry, mut backward) = (0, 0);
-        let mut degree = vec![0usize; ids.len()];
-        for e in &graph.edges {
-            let (a, b) = (ids[e.i], ids[e.j]);
-            if u64::from(b) == u64::from(a) + 1 {
-                odometry += 1;
-            }
-            if a > b {
-                backward += 1;
-            }
-            degree[e.i] += 1;
-            degree[e.j] += 1;
-        }
-        let pair = |k: usize| {
-            let e = &graph.edges[k];
-            (e.i.min(e.j), e.i.max(e.j))
-        };
-        let bits = |k: usize| -> Vec<u64> {
+        let ends: Vec<(usize, usize)> = graph.edges.iter().map(|e| (e.i, e.j)).collect();
+        let (odometry, backward, degree) = edge_counts(ids, &ends);
+        let (duplicate, exact) = duplicates(&ends, |k| {
             let e = &graph.edges[k];
             e.measurement
                 .values()
                 .chain(e.information.0)
                 .map(f64::to_bits)
                 .collect()
-        };
-        let mut order: Vec<usize> = (0..graph.edges.len()).collect();
-        order.sort_unstable_by_key(|&k| (pair(k), k));
-        let (mut duplicate, mut exact) = (0, 0);
-        for group in order.chunk_by(|&a, &b| pair(a) == pair(b)) {
-            duplicate += group.len() - 1;
-            for (n, &k) in group.iter().enumerate().skip(1) {
-                let same = |&earlier: &usize| {
-                    let (e, f) = (&graph.edges[earlier], &graph.edges[k]);
-                    (e.i, e.j) == (f.i, f.j) && bits(earlier) == bits(k)
-                };
-                if group[..n].iter().any(same) {
-                    exact += 1;
-                }
-            }
-        }
+        });
         let (_, components) = graph.connected_components();
         let (id_min, id_max) = (ids.first().copied(), ids.last().copied());
         GraphStats3 {
@@ -233,10 +213,7 @@ impl GraphStats3 {
             isolated_poses: degree.iter().filter(|&&d| d == 0).count(),
             id_min,
             id_max,
-            id_gaps: match (id_min, id_max) {
-                (Some(lo), Some(hi)) => u64::from(hi - lo) + 1 - ids.len() as u64,
-                _ => 0,
-            },
+            id_gaps: id_gaps(ids),
             fixed: graph.fixed.iter().map(|&k| ids[k]).collect(),
         }
     }
