@@ -359,6 +359,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         staircase_budget: args.staircase_budget * 1e9,
     };
     let t1 = Instant::now();
+    // What `--robust` found, for the viewer once the estimate is known.
+    let mut gnc_view = None;
     let (solution, robust) = match args.robust {
         None => (
             progress.watch(|| rec.observe(|| solve(&graph, &options)))?,
@@ -374,6 +376,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             };
             let r = progress.watch(|| rec.observe(|| robust_solve(&graph, &robust_options)))?;
             let report = RobustReport::new(&r, &graph, &read_report.edge_lines, &robust_options);
+            if rec.is_enabled() {
+                gnc_view = Some((
+                    graph.clone(),
+                    r.rejected.clone(),
+                    r.residuals.clone(),
+                    r.iterations.clone(),
+                ));
+            }
             if args.drop_outliers {
                 graph = crate::robust::gnc::without_edges(&graph, &r.rejected);
                 if let Some(v) = &mut read_report.vertigo {
@@ -393,6 +403,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         .clone_from(&solution.landmark_estimate);
     graph.landmarks.declared = true;
     rec.optimized(&graph, options.weights);
+    if let Some((mut all_edges, rejected, residuals, iterations)) = gnc_view {
+        // Every edge as read (also under --drop-outliers), at the estimate.
+        all_edges.poses.clone_from(&graph.poses);
+        let weights: Vec<&[f64]> = iterations.iter().map(|i| i.weights.as_slice()).collect();
+        rec.robust(&all_edges, &rejected, &residuals, &weights);
+    }
 
     let t2 = Instant::now();
     // A write that fails after all (a full disk) is reported after the report, never instead.

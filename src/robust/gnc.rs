@@ -174,6 +174,9 @@ pub struct GncIteration {
     pub outliers: usize,
     /// Whether the inner problem's solve was certified (for its weights).
     pub certified: bool,
+    /// Per edge: w_e at this iteration (the viewer draws them; not in the JSON report).
+    #[serde(skip)]
+    pub weights: Vec<f64>,
 }
 
 /// What [`robust_solve`] found.
@@ -375,6 +378,7 @@ pub fn robust_solve(graph: &PoseGraph, options: &RobustOptions) -> crate::Result
                 weighted_cost: cost,
                 outliers,
                 certified: s.certified,
+                weights: w.clone(),
             });
             crate::progress::iteration(
                 k as u64 + 1,

@@ -5,7 +5,7 @@
 use super::{
     Certificate, Entity, HEADING_COLOR, Item, LANDMARK_COLOR, LANDMARK_RADIUS, LINE_RADIUS,
     LOOP_CLOSURE_COLOR, OBSERVATION_COLOR, OBSERVATION_RADIUS, ODOMETRY_COLOR, POINT_RADIUS,
-    POSE_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
+    POSE_COLOR, REJECTED_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
 };
 use crate::graph::PoseGraph;
 
@@ -319,20 +319,83 @@ pub fn residual_entity(
         .zip(weights)
         .map(|(e, w)| crate::problem::matrix::edge_cost(e, *w, &graph.poses))
         .collect();
-    let strips = graph
-        .edges
-        .iter()
-        .map(|e| {
-            let (a, b) = (graph.poses[e.i], graph.poses[e.j]);
-            [point(a.x, a.y), point(b.x, b.y)]
-        })
-        .collect();
-    let (from, to) = graph
-        .edges
-        .iter()
-        .map(|e| (f64::from(graph.ids[e.i]), f64::from(graph.ids[e.j])))
-        .unzip();
+    let (strips, from, to) = edge_strips(graph, |_| true);
     colored_strips(path, strips, residuals, [("from", from), ("to", to)])
+}
+
+/// The strip of each edge between its poses' positions, with the ids of its ends.
+fn edge_strips(
+    graph: &PoseGraph,
+    keep: impl Fn(usize) -> bool,
+) -> (Vec<[[f32; 2]; 2]>, Vec<f64>, Vec<f64>) {
+    let mut strips = Vec::new();
+    let (mut from, mut to) = (Vec::new(), Vec::new());
+    for (_, e) in graph.edges.iter().enumerate().filter(|(k, _)| keep(*k)) {
+        let (a, b) = (graph.poses[e.i], graph.poses[e.j]);
+        strips.push([point(a.x, a.y), point(b.x, b.y)]);
+        from.push(f64::from(graph.ids[e.i]));
+        to.push(f64::from(graph.ids[e.j]));
+    }
+    (strips, from, to)
+}
+
+/// What `pgo-solve --robust` found, drawn on the estimate `graph`: `optimized/rejected`, the
+/// edges GNC rejected in [`REJECTED_COLOR`] with their `residual` r_e² at the estimate; and per
+/// GNC iteration k (timeline `gnc_iteration`), `robust/weights`: every edge colored by its
+/// weight w_e, from [`REJECTED_COLOR`] at 0 to [`ODOMETRY_COLOR`] at 1, the weights as
+/// `weight`.
+pub fn robust_entities(
+    graph: &PoseGraph,
+    rejected: &[bool],
+    residuals: &[f64],
+    weights_by_iteration: &[&[f64]],
+) -> Vec<Entity> {
+    let (strips, from, to) = edge_strips(graph, |k| rejected[k]);
+    let rejected_residuals = residuals
+        .iter()
+        .zip(rejected)
+        .filter(|(_, r)| **r)
+        .map(|(v, _)| *v)
+        .collect();
+    let mut v = vec![
+        Entity::fixed(
+            "optimized/rejected",
+            Item::Strips {
+                colors: vec![REJECTED_COLOR],
+                strips,
+                radius: RESIDUAL_LINE_RADIUS,
+            },
+        )
+        .with("from", from)
+        .with("to", to)
+        .with("residual", rejected_residuals),
+    ];
+    let (strips, from, to) = edge_strips(graph, |_| true);
+    for (k, weights) in weights_by_iteration.iter().enumerate() {
+        let blend = |w: f64| {
+            let w = w.clamp(0.0, 1.0);
+            let c = |a: u8, b: u8| (f64::from(a) + w * (f64::from(b) - f64::from(a))).round() as u8;
+            [
+                c(REJECTED_COLOR[0], ODOMETRY_COLOR[0]),
+                c(REJECTED_COLOR[1], ODOMETRY_COLOR[1]),
+                c(REJECTED_COLOR[2], ODOMETRY_COLOR[2]),
+            ]
+        };
+        let mut e = Entity::fixed(
+            "robust/weights",
+            Item::Strips {
+                strips: strips.clone(),
+                colors: weights.iter().map(|&w| blend(w)).collect(),
+                radius: LINE_RADIUS,
+            },
+        )
+        .with("from", from.clone())
+        .with("to", to.clone())
+        .with("weight", weights.to_vec());
+        e.when = When::GncIteration(k as u64 + 1);
+        v.push(e);
+    }
+    v
 }
 
 fn flag(b: bool) -> f64 {

@@ -17,8 +17,12 @@
 //! | `graph/headings` | Arrows2D | each pose's heading |
 //! | `graph/odometry` | LineStrips2D | edges with \|id_i − id_j\| = 1, one 2-point strip each; their ids in `from`, `to` |
 //! | `graph/loop_closures` | LineStrips2D | the other edges, in another color |
+//! | `graph/landmarks`, `graph/observations` | Points2D, LineStrips2D | landmarks and the rays of their observations |
 //! | `optimized/...` | the same | the optimized estimate (`pgo-solve`), beside the input |
 //! | `optimized/residuals` | LineStrips2D | every edge colored by its term of the cost f (log scale, blue to red); the terms in `residual` |
+//! | `optimized/landmark_residuals` | LineStrips2D | observation rays colored by their terms of f |
+//! | `optimized/rejected` | LineStrips2D | `--robust`: the edges GNC rejected, red; r_e² in `residual` |
+//! | `robust/weights` | LineStrips2D | `--robust`: every edge colored by its GNC weight (red 0 to blue 1) at each step of the timeline `gnc_iteration`; the weights in `weight` |
 //! | `solver/NAME` | Scalars | one value per solver iteration on the timeline `iteration` |
 //! | `spectrum/eigenvalues`, `spectrum/penalized_eigenvalues`, `spectrum/rotation_eigenvalues` | BarChart | the smallest eigenvalues of W, W(λ*), M, ascending |
 //! | `spectrum/near_zero` | Scalars | eigenvalues of W(λ*) at zero (`szep` beside it) |
@@ -63,6 +67,8 @@ pub const LOOP_CLOSURE_COLOR: Rgb = [250, 140, 40];
 /// Landmarks (issue 13) and the rays of their observations.
 pub const LANDMARK_COLOR: Rgb = [225, 70, 200];
 pub const OBSERVATION_COLOR: Rgb = [150, 150, 150];
+/// Edges rejected by `--robust` (issue 14).
+pub const REJECTED_COLOR: Rgb = [255, 30, 30];
 
 /// The residual color scale, from the smallest term (first) to the largest (last).
 pub const RESIDUAL_SCALE: [Rgb; 5] = [
@@ -117,6 +123,8 @@ pub enum When {
     Static,
     /// At this step of the `iteration` timeline.
     Iteration(u64),
+    /// At this GNC iteration (`pgo-solve --robust`), the `gnc_iteration` timeline.
+    GncIteration(u64),
 }
 
 /// One logging call: the data at `path`, with exact values as extra components.
@@ -243,6 +251,18 @@ impl Recorder {
             }
             v
         });
+    }
+
+    /// What `--robust` found, on the estimate `graph` ([`robust_entities`]): the rejected
+    /// edges, and every edge's GNC weight at each GNC iteration.
+    pub fn robust(
+        &self,
+        graph: &PoseGraph,
+        rejected: &[bool],
+        residuals: &[f64],
+        weights_by_iteration: &[&[f64]],
+    ) {
+        self.emit(|| robust_entities(graph, rejected, residuals, weights_by_iteration));
     }
 
     /// The certificate: `report/certificate`, text and values.
@@ -448,6 +468,46 @@ mod tests {
         };
         assert_eq!((colors.len(), strips.len()), (4, 4));
         assert_eq!(colors[0], RESIDUAL_SCALE[0]);
+    }
+
+    #[test]
+    fn rejected_edges_apart_and_gnc_weights_per_iteration() {
+        let g = square();
+        // Edge 2 (ids 2 -> 3, from (1, 1) to (0, 1)) rejected; two GNC iterations.
+        let rejected = [false, false, true, false];
+        let residuals = [0.0, 0.0, 9.0, 0.0];
+        let first = [1.0, 1.0, 0.5, 1.0];
+        let last = [1.0, 1.0, 0.0, 1.0];
+        let v = robust_entities(&g, &rejected, &residuals, &[&first, &last]);
+        assert_eq!(v.len(), 3);
+        assert_eq!(v[0].path, "optimized/rejected");
+        assert_eq!(v[0].when, When::Static);
+        let Item::Strips { strips, colors, .. } = &v[0].item else {
+            panic!("not strips")
+        };
+        assert_eq!(strips, &vec![[[1.0f32, 1.0], [0.0, 1.0]]]);
+        assert_eq!(colors, &vec![REJECTED_COLOR]);
+        let column =
+            |e: &Entity, name: &str| e.values.iter().find(|(n, _)| *n == name).unwrap().1.clone();
+        assert_eq!(column(&v[0], "from"), vec![2.0]);
+        assert_eq!(column(&v[0], "to"), vec![3.0]);
+        assert_eq!(column(&v[0], "residual"), vec![9.0]);
+        assert_eq!(
+            (v[1].when, v[2].when),
+            (When::GncIteration(1), When::GncIteration(2))
+        );
+        let Item::Strips { strips, colors, .. } = &v[1].item else {
+            panic!("not strips")
+        };
+        assert_eq!(strips.len(), 4);
+        // Weight 1 is the odometry blue; ½ halfway to red: (255+90)/2, (30+150)/2, (30+240)/2.
+        assert_eq!(colors[0], ODOMETRY_COLOR);
+        assert_eq!(colors[2], [173, 90, 135]);
+        let Item::Strips { colors, .. } = &v[2].item else {
+            panic!("not strips")
+        };
+        assert_eq!(colors[2], REJECTED_COLOR);
+        assert_eq!(column(&v[2], "weight"), last.to_vec());
     }
 
     #[test]

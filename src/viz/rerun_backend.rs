@@ -292,6 +292,13 @@ fn blueprint(paths: &BTreeSet<String>) -> rerun::blueprint::Blueprint {
                 .into(),
         );
     }
+    if has("robust/") {
+        top.push(
+            Spatial2DView::new("GNC weights (red 0, blue 1) per gnc_iteration")
+                .with_origin("/robust")
+                .into(),
+        );
+    }
     let mut bottom: Vec<ContainerLike> = Vec::new();
     // One plot per solver value: each gets its own scale.
     let series: Vec<ContainerLike> = paths
@@ -362,6 +369,10 @@ impl Sink {
             When::Static => true,
             When::Iteration(step) => {
                 rec.set_time_sequence("iteration", i64::try_from(step).unwrap_or(i64::MAX));
+                false
+            }
+            When::GncIteration(step) => {
+                rec.set_time_sequence("gnc_iteration", i64::try_from(step).unwrap_or(i64::MAX));
                 false
             }
         };

@@ -38,6 +38,7 @@ ODOMETRY_RGBA = 0x5A96F0FF
 LOOP_CLOSURE_RGBA = 0xFA8C28FF
 RESIDUAL_SMALLEST_RGBA = 0x3C5AFFFF
 RESIDUAL_LARGEST_RGBA = 0xF02828FF
+REJECTED_RGBA = 0xFF1E1EFF
 
 
 # ---------------------------------------------------------------------------------------------
@@ -119,7 +120,8 @@ class Recording:
                         if value is not None:
                             entity[name] = value
             else:
-                steps = batch.column("iteration").to_pylist() if "iteration" in timelines else [None] * batch.num_rows
+                timeline = next((t for t in ("iteration", "gnc_iteration") if t in timelines), None)
+                steps = batch.column(timeline).to_pylist() if timeline else [None] * batch.num_rows
                 rows = self.series.setdefault(path_, [])
                 for r in range(batch.num_rows):
                     rows.append((steps[r], {n: batch.column(n)[r].as_py() for n in columns}))
@@ -516,3 +518,42 @@ def test_staircase_iterations_on_the_timeline(datasets_dir, tmp_path):
     ranks = {row["Scalars:scalars"][0] for _, row in rec.series["/solver/rank"]}
     assert ranks == {1.0}
     assert all(row["Scalars:scalars"][0] >= 0 for _, row in rec.series["/solver/gradient_norm"])
+
+
+def test_robust_records_rejected_edges_and_gnc_weights(datasets_dir, tmp_path):
+    # intel.g2o with 20 random false loop closures (Vertigo's model): `optimized/rejected` holds
+    # exactly the edges the JSON report lists as rejected, drawn between the written estimate's
+    # positions in the rejected color; `robust/weights` holds one drawing per GNC iteration on the
+    # `gnc_iteration` timeline, whose last weights reject the same edges.
+    run("pgo-simulate", ["--corrupt", datasets_dir / "intel.g2o", "--outliers", "20", "--seed", "1",
+                         "-o", "bad.g2o"], tmp_path)
+    args = ["bad.g2o", "--robust", "tls", "--json", "--no-timings", "-o", "opt.g2o"]
+    plain = run("pgo-solve", args, tmp_path)
+    recorded = run("pgo-solve", [*args, "--rerun-save", "r.rrd"], tmp_path)
+    assert recorded.stdout == plain.stdout
+    verify(tmp_path / "r.rrd")
+    report = json.loads(recorded.stdout)["robust"]
+    assert report["rejected"] >= 20
+    rec = Recording(tmp_path / "r.rrd")
+    vertices, edges = read_g2o(tmp_path / "opt.g2o")
+    rejected = rec.static["/optimized/rejected"]
+    pairs = [(int(a), int(b)) for a, b in zip(rejected["from"], rejected["to"])]
+    assert pairs == [(e["i"], e["j"]) for e in report["rejected_edges"]]
+    assert rejected["residual"] == [e["residual_sq"] for e in report["rejected_edges"]]
+    assert rejected["LineStrips2D:colors"] == [REJECTED_RGBA]
+    for strip, (i, j) in zip(rejected["LineStrips2D:strips"], pairs):
+        assert strip == [[f32(vertices[i][0]), f32(vertices[i][1])], [f32(vertices[j][0]), f32(vertices[j][1])]]
+    # The strips and their `weight` column may arrive as separate rows of one step: merge them.
+    steps: dict[int, dict] = {}
+    for step, row in rec.series["/robust/weights"]:
+        steps.setdefault(step, {}).update({k: v for k, v in row.items() if v is not None})
+    assert sorted(steps) == list(range(1, report["gnc_iterations"] + 1))
+    last = steps[report["gnc_iterations"]]
+    assert len(last["weight"]) == len(edges)
+    low = {(i, j) for (i, j, *_), w in zip(edges, last["weight"]) if w < 0.5}
+    assert low == set(pairs)
+    for w, rgba in zip(last["weight"], last["LineStrips2D:colors"]):
+        if w == 1.0:
+            assert rgba == ODOMETRY_RGBA
+        elif w == 0.0:
+            assert rgba == REJECTED_RGBA
