@@ -55,7 +55,12 @@ fn to_py(py: Python<'_>, e: pgo::Error) -> PyErr {
         pgo::Error::Io { path, source } => match source.raw_os_error() {
             // OSError(errno, strerror, filename) is FileNotFoundError, PermissionError... by errno.
             Some(code) => PyOSError::new_err((code, source.to_string(), path)),
-            None => PgoError::new_err(format!("{path}: {source}")),
+            // No errno (the writer's errors name the path, not the temporary file): the OSError
+            // subclass of the kind, e.g. FileNotFoundError for a missing directory.
+            None => PyErr::from(std::io::Error::new(
+                source.kind(),
+                format!("{path}: {source}"),
+            )),
         },
         pgo::Error::Invalid(msg) => PgoError::new_err(msg),
     }
