@@ -205,9 +205,11 @@ class Solution(_Report):
                 f"; poses are the LM-refined estimate (chi2 {r['written_chi2']!r}), "
                 "not the certified one"
             )
+        ran = sorted({c["method"] for c in r["components"]})
+        method = r["method"] if ran == [r["method"]] else f"{r['method']} ({', '.join(ran)})"
         return (
             f"<pgo.Solution: {head}: {self._bound_text()}; {r['poses']} poses, "
-            f"{len(r['components'])} component(s), method {r['method']}{tail}>"
+            f"{len(r['components'])} component(s), method {method}{tail}>"
         )
 
 
