@@ -81,19 +81,19 @@ def read(
     ``OSError`` (e.g. ``FileNotFoundError``) for a file that cannot be read. The reader's
     warnings are issued as :class:`ReadWarning` and kept in ``Graph.warnings``.
     """
-    flags = dict(
-        format=format,
-        dialect=dialect,
-        strict=strict,
-        ignore_equiv=ignore_equiv,
-        allow_indefinite=allow_indefinite,
-    )
+    flags = (format, dialect, strict, ignore_equiv, allow_indefinite)
     if isinstance(source, (bytes, bytearray)):
-        graph = _pgo.read_bytes(bytes(source), "<string>", **flags)
-    elif isinstance(source, str) and ("\n" in source or "\r" in source):
-        graph = _pgo.read_bytes(source.encode("utf-8"), "<string>", **flags)
+        graph = _pgo.read_bytes(bytes(source), "<string>", *flags)
+    elif isinstance(source, str):
+        if "\n" in source or "\r" in source:
+            graph = _pgo.read_bytes(source.encode("utf-8"), "<string>", *flags)
+        else:
+            graph = _pgo.read_path(source, *flags)
     else:
-        graph = _pgo.read_path(os.fspath(source), **flags)
+        path = os.fspath(source)
+        if not isinstance(path, str):
+            raise TypeError(f"expected a path or the text of a file, found {path!r}")
+        graph = _pgo.read_path(path, *flags)
     for w in graph.warnings:
         warnings.warn(w, ReadWarning, stacklevel=2)
     return graph

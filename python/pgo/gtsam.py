@@ -23,7 +23,7 @@ from typing import Any, Optional, Tuple
 
 import numpy as np
 
-import gtsam as _gtsam
+import gtsam as _gtsam  # type: ignore[import-not-found, unused-ignore]
 
 from . import Graph
 

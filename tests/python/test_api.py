@@ -45,3 +45,38 @@ def test_parse_error_is_a_value_error_with_a_place():
     assert issubclass(pgo.ParseError, pgo.PgoError)
     assert issubclass(pgo.PgoError, ValueError)
     assert pgo.ParseError.__module__ == "pgo" and pgo.Graph.__module__ == "pgo"
+
+
+USAGE = """\
+import numpy as np
+import pgo
+
+graph: pgo.Graph = pgo.read("MIT.g2o")
+solution = pgo.solve(graph, weights="unit", tol=1e-6)
+poses: np.ndarray = solution.poses
+certificate = pgo.certify(graph, solution.poses)
+ok: bool = certificate.certified
+eigenvalues: np.ndarray = pgo.spectrum(graph, 3).eigenvalues
+graph.with_poses(poses).write("out.g2o", format="toro")
+built = pgo.Graph(np.zeros((2, 3)), [[0, 1]], [[1.0, 0.0, 0.0]], fixed=[0])
+try:
+    pgo.read("x.g2o")
+except pgo.ParseError as e:
+    line: int = e.line
+"""
+
+
+def test_mypy_strict_on_the_package_and_a_users_code(tmp_path):
+    import subprocess
+    import sys
+
+    (tmp_path / "usage.py").write_text(USAGE)
+    for target in (["-p", "pgo"], ["usage.py"]):
+        proc = subprocess.run(
+            [sys.executable, "-m", "mypy", "--strict", "--no-incremental", *target],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert proc.returncode == 0, proc.stdout + proc.stderr
