@@ -70,12 +70,13 @@ pub struct Args {
 
 /// What `--json` prints: the library's report and the reader's warnings (lines skipped, e.g.
 /// EQUIV with --ignore-equiv: the bound is for the graph without them).
+/// The Python package builds its report with this too.
 #[derive(Serialize)]
-struct JsonReport<'a> {
+pub struct JsonReport<'a> {
     #[serde(flatten)]
-    report: &'a Report,
+    pub report: &'a Report,
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    warnings: Vec<String>,
+    pub warnings: Vec<String>,
 }
 
 /// Entry point of the `pgo-certify` binary.

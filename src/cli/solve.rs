@@ -288,7 +288,9 @@ impl RobustReport {
 }
 
 impl<'a> Report<'a> {
-    fn new(
+    /// The report of `solution` as `--json` prints it (the Python package's `Solution` is this
+    /// report too, built by this function, without robust part and timings).
+    pub fn new(
         solution: &'a Solution,
         robust: Option<RobustReport>,
         warnings: Vec<String>,

@@ -1,0 +1,886 @@
+//! The extension module `pgo._pgo` of the Python package `pgo`: the pose graph as a Python class
+//! over the library's [`PoseGraph`], and one call each into the library's jobs (read, write,
+//! [`pgo::solve`], [`pgo::certify_estimate`], [`pgo::spectrum::spectrum`]). The reports are the
+//! tools' own `--json` reports, built by the same code (`pgo::cli::{solve, certify, spectrum}`)
+//! and handed to Python as JSON text; `pgo/__init__.py` wraps them in classes. No orchestration
+//! here: everything a tool decides, the library decides.
+
+use numpy::ndarray::ArrayViewD;
+use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLikeDyn, PyArrayMethods};
+use pgo::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
+use pgo::io::{self, Dialect, Format, ReadOptions, ReadReport, WriteOptions};
+use pgo::vertigo::Vertigo;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use std::path::{Path, PathBuf};
+
+create_exception!(
+    pgo,
+    PgoError,
+    PyValueError,
+    "An error of pgo's library: a request it cannot carry out (e.g. two FIX poses in one \
+     component, a graph too large for method=\"sdp\", an estimate of the wrong shape). A \
+     ValueError."
+);
+create_exception!(
+    pgo,
+    ParseError,
+    PgoError,
+    "An error in an input file or text, at a place: `.path`, `.line` and `.column` (1-based, \
+     columns in bytes after a UTF-8 BOM) and `.reason`; the message is the tools' error line, \
+     `PATH:LINE:COL: error: REASON`."
+);
+
+/// Turns a library error into a Python exception: [`ParseError`] with its place, `OSError` (its
+/// subclass by errno, e.g. `FileNotFoundError`) with the path, else [`PgoError`].
+fn to_py(py: Python<'_>, e: pgo::Error) -> PyErr {
+    match e {
+        pgo::Error::Parse(p) => {
+            let message = format!("{}: error: {}", p.location, p.kind);
+            let err = ParseError::new_err(message);
+            let value = err.value(py);
+            let set = || -> PyResult<()> {
+                value.setattr("path", &p.location.path)?;
+                value.setattr("line", p.location.line)?;
+                value.setattr("column", p.location.col)?;
+                value.setattr("reason", p.kind.to_string())?;
+                Ok(())
+            };
+            match set() {
+                Ok(()) => err,
+                Err(e) => e,
+            }
+        }
+        pgo::Error::Io { path, source } => match source.raw_os_error() {
+            // OSError(errno, strerror, filename) is FileNotFoundError, PermissionError... by errno.
+            Some(code) => PyOSError::new_err((code, source.to_string(), path)),
+            // No errno (the writer's errors name the path, not the temporary file): the OSError
+            // subclass of the kind, e.g. FileNotFoundError for a missing directory.
+            None => PyErr::from(std::io::Error::new(
+                source.kind(),
+                format!("{path}: {source}"),
+            )),
+        },
+        pgo::Error::Invalid(msg) => PgoError::new_err(msg),
+    }
+}
+
+fn io_to_py(py: Python<'_>, e: impl Into<pgo::Error>) -> PyErr {
+    to_py(py, e.into())
+}
+
+fn invalid(msg: impl Into<String>) -> PyErr {
+    PgoError::new_err(msg.into())
+}
+
+/// A value of one of the library's clap enums by its name on the command line.
+fn choice<T: clap::ValueEnum>(what: &str, name: &str) -> PyResult<T> {
+    T::from_str(name, false).map_err(|_| {
+        let names: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value().map(|p| format!("'{}'", p.get_name())))
+            .collect();
+        PyValueError::new_err(format!(
+            "{what} must be one of {}, found '{name}'",
+            names.join(", ")
+        ))
+    })
+}
+
+fn path_str(path: &Path) -> PyResult<&str> {
+    path.to_str()
+        .ok_or_else(|| PyValueError::new_err(format!("{}: not a UTF-8 path", path.display())))
+}
+
+/// A planar pose graph: poses with ids, relative-pose edges with information matrices, FIX ids,
+/// and landmarks observed from poses when its file has them.
+///
+/// Read one with `pgo.read(path_or_text)`, or build one from arrays:
+///
+///     pgo.Graph(poses, edges, measurements, information=None, ids=None, fixed=None,
+///               allow_indefinite=False)
+///
+/// poses: (n, 3) float (x, y, theta) per pose; edges: (m, 2) vertex ids (i, j), an edge
+/// measuring the pose of j in the frame of i; measurements: (m, 3) (dx, dy, dtheta);
+/// information: (m, 6) upper triangles of the information matrices in g2o order
+/// (I11 I12 I13 I22 I23 I33 over x, y, theta), identity if None; ids: (n,) vertex ids of the
+/// poses (0..n-1 if None), any order, distinct, 0 <= id < 2^31; fixed: vertex ids held fixed
+/// (g2o's FIX). The same checks as the file reader: finite values, known ids, no self-loops,
+/// positive definite information (unless allow_indefinite).
+///
+/// A Graph is immutable: its array attributes are copies. `with_poses` gives a graph with
+/// another estimate.
+#[pyclass(module = "pgo", name = "Graph", frozen)]
+pub struct Graph {
+    graph: PoseGraph,
+    format: Format,
+    dialect: Dialect,
+    warnings: Vec<String>,
+    vertigo: Option<Vertigo>,
+    /// Where it came from: a path, "<string>" or "<arrays>".
+    source: String,
+}
+
+impl Graph {
+    fn from_read(graph: PoseGraph, report: ReadReport, source: String) -> Self {
+        Graph {
+            graph,
+            format: report.format,
+            dialect: report.dialect,
+            warnings: report.warnings.iter().map(|w| w.to_string()).collect(),
+            vertigo: report.vertigo,
+            source,
+        }
+    }
+}
+
+/// The rows of a float array of shape (rows, cols) (any layout), or none for any empty array
+/// when `rows` is None or 0; every value finite.
+fn matrix(
+    name: &str,
+    a: &ArrayViewD<'_, f64>,
+    cols: usize,
+    rows: Option<usize>,
+) -> PyResult<Vec<Vec<f64>>> {
+    let shape = a.shape();
+    if a.is_empty() && rows.unwrap_or(0) == 0 {
+        return Ok(Vec::new());
+    }
+    if shape.len() != 2 || shape[1] != cols || rows.is_some_and(|r| r != shape[0]) {
+        return Err(PyValueError::new_err(format!(
+            "{name} must have shape ({}, {cols}), found {shape:?}",
+            rows.map_or("m".to_string(), |r| r.to_string())
+        )));
+    }
+    // Logical (row-major) order whatever the strides.
+    let values: Vec<f64> = a.iter().copied().collect();
+    let rows: Vec<Vec<f64>> = values.chunks_exact(cols).map(|r| r.to_vec()).collect();
+    for (k, row) in rows.iter().enumerate() {
+        if let Some(v) = row.iter().find(|v| !v.is_finite()) {
+            return Err(invalid(format!(
+                "{name}[{k}]: {v} is not finite (g2o and GTSAM cannot read it back)"
+            )));
+        }
+    }
+    Ok(rows)
+}
+
+/// A vertex id from a float (arrays of ids are taken as float64 to catch fractions).
+fn vertex_id(name: &str, v: f64) -> PyResult<VertexId> {
+    if v.fract() != 0.0 || !(0.0..=f64::from(pgo::graph::MAX_VERTEX_ID)).contains(&v) {
+        return Err(invalid(format!(
+            "{name}: {v} is not a vertex id (an integer from 0 to {})",
+            pgo::graph::MAX_VERTEX_ID
+        )));
+    }
+    Ok(v as VertexId)
+}
+
+fn id_list(name: &str, a: &ArrayViewD<'_, f64>) -> PyResult<Vec<VertexId>> {
+    if a.ndim() > 1 && !a.is_empty() {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be one-dimensional, found shape {:?}",
+            a.shape()
+        )));
+    }
+    a.iter()
+        .enumerate()
+        .map(|(k, &v)| vertex_id(&format!("{name}[{k}]"), v))
+        .collect()
+}
+
+fn float_array<'py>(
+    py: Python<'py>,
+    v: Vec<f64>,
+    cols: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let rows = v.len() / cols;
+    PyArray1::from_vec(py, v).reshape([rows, cols])
+}
+
+fn id_array<'py>(py: Python<'py>, v: Vec<i64>, cols: usize) -> PyResult<Bound<'py, PyArray2<i64>>> {
+    let rows = v.len() / cols;
+    PyArray1::from_vec(py, v).reshape([rows, cols])
+}
+
+#[pymethods]
+impl Graph {
+    #[new]
+    #[pyo3(signature = (poses, edges, measurements, information=None, ids=None, fixed=None, *, allow_indefinite=false))]
+    fn new(
+        poses: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        edges: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        measurements: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        information: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        ids: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        fixed: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        allow_indefinite: bool,
+    ) -> PyResult<Self> {
+        let poses_view = poses.as_array();
+        let pose_rows = matrix("poses", &poses_view, 3, None)?;
+        let n = pose_rows.len();
+        let ids: Vec<VertexId> = match &ids {
+            Some(a) => {
+                let ids = id_list("ids", &a.as_array())?;
+                if ids.len() != n {
+                    return Err(PyValueError::new_err(format!(
+                        "ids has {} entries for {n} poses",
+                        ids.len()
+                    )));
+                }
+                ids
+            }
+            None => {
+                if n > pgo::graph::MAX_VERTEX_ID as usize {
+                    return Err(invalid("too many poses for g2o's ids"));
+                }
+                (0..n as VertexId).collect()
+            }
+        };
+        // Poses in ascending id order, as the reader keeps them.
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by_key(|&k| ids[k]);
+        for w in order.windows(2) {
+            if ids[w[0]] == ids[w[1]] {
+                return Err(invalid(format!("ids: vertex {} appears twice", ids[w[0]])));
+            }
+        }
+        let sorted_ids: Vec<VertexId> = order.iter().map(|&k| ids[k]).collect();
+        let sorted_poses: Vec<Pose2> = order
+            .iter()
+            .map(|&k| Pose2::new(pose_rows[k][0], pose_rows[k][1], pose_rows[k][2]))
+            .collect();
+        let index = |name: &str, id: VertexId| {
+            sorted_ids
+                .binary_search(&id)
+                .map_err(|_| invalid(format!("{name}: vertex {id} is not one of the poses' ids")))
+        };
+
+        let edges_view = edges.as_array();
+        let edge_rows = matrix("edges", &edges_view, 2, None)?;
+        let m = edge_rows.len();
+        let measurements_view = measurements.as_array();
+        let measurement_rows = matrix("measurements", &measurements_view, 3, Some(m))?;
+        let information_view = information.as_ref().map(|a| a.as_array());
+        let information_rows = match &information_view {
+            Some(v) => Some(matrix("information", v, 6, Some(m))?),
+            None => None,
+        };
+        let mut graph_edges = Vec::with_capacity(m);
+        for k in 0..m {
+            let name = format!("edges[{k}]");
+            let a = vertex_id(&name, edge_rows[k][0])?;
+            let b = vertex_id(&name, edge_rows[k][1])?;
+            if a == b {
+                return Err(invalid(format!(
+                    "{name}: self-loop: edge from vertex {a} to itself"
+                )));
+            }
+            let noise = match &information_rows {
+                Some(rows) => {
+                    let r = &rows[k];
+                    SymMat3([r[0], r[1], r[2], r[3], r[4], r[5]])
+                }
+                None => SymMat3::IDENTITY,
+            };
+            if !allow_indefinite && let Err(pivot) = noise.check_positive_definite() {
+                return Err(invalid(format!(
+                    "information[{k}]: the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass allow_indefinite=True to accept it"
+                )));
+            }
+            let z = &measurement_rows[k];
+            graph_edges.push(Edge {
+                i: index(&name, a)?,
+                j: index(&name, b)?,
+                measurement: Pose2::new(z[0], z[1], z[2]),
+                noise,
+            });
+        }
+        let mut fixed_indices = Vec::new();
+        if let Some(f) = &fixed {
+            for (k, id) in id_list("fixed", &f.as_array())?.into_iter().enumerate() {
+                let i = index(&format!("fixed[{k}]"), id)?;
+                if !fixed_indices.contains(&i) {
+                    fixed_indices.push(i);
+                }
+            }
+        }
+        let mut graph = PoseGraph::with_edges(sorted_poses, graph_edges);
+        graph.ids = sorted_ids;
+        graph.fixed = fixed_indices;
+        Ok(Graph {
+            graph,
+            format: Format::G2o,
+            dialect: Dialect::G2o,
+            warnings: Vec::new(),
+            vertigo: None,
+            source: "<arrays>".into(),
+        })
+    }
+
+    /// The estimate: (n, 3) float64, one row (x, y, theta) per pose, in ascending id order.
+    #[getter]
+    fn poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self.graph.poses.iter().flat_map(|p| p.values()).collect();
+        float_array(py, v, 3)
+    }
+
+    /// The poses' vertex ids: (n,) int64, ascending.
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        PyArray1::from_vec(py, self.graph.ids.iter().map(|&i| i64::from(i)).collect())
+    }
+
+    /// The edges as vertex ids: (m, 2) int64 (i, j) in file order; an edge measures the pose of
+    /// j in the frame of i.
+    #[getter]
+    fn edges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let ids = &self.graph.ids;
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| [i64::from(ids[e.i]), i64::from(ids[e.j])])
+            .collect();
+        id_array(py, v, 2)
+    }
+
+    /// The edges as row indices into `poses`: (m, 2) int64.
+    #[getter]
+    fn edge_indices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| [e.i as i64, e.j as i64])
+            .collect();
+        id_array(py, v, 2)
+    }
+
+    /// The measurements: (m, 3) float64 (dx, dy, dtheta), the pose of j in the frame of i.
+    #[getter]
+    fn measurements<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| e.measurement.values())
+            .collect();
+        float_array(py, v, 3)
+    }
+
+    /// The information matrices: (m, 6) float64, upper triangles in g2o order
+    /// (I11 I12 I13 I22 I23 I33 over x, y, theta), whatever the file's dialect (TORO's order
+    /// is reordered, covariances are inverted; a singular covariance gives a row of NaN).
+    #[getter]
+    fn information<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| self.graph.information(e).map_or([f64::NAN; 6], |m| m.0))
+            .collect();
+        float_array(py, v, 6)
+    }
+
+    /// The fixed poses' ids (g2o's FIX), in the order of the FIX lines: (k,) int64.
+    #[getter]
+    fn fixed<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let ids = &self.graph.ids;
+        PyArray1::from_vec(
+            py,
+            self.graph
+                .fixed
+                .iter()
+                .map(|&k| i64::from(ids[k]))
+                .collect(),
+        )
+    }
+
+    /// The landmarks' ids: (L,) int64, ascending (empty for a pose graph).
+    #[getter]
+    fn landmark_ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let ids = &self.graph.landmarks.ids;
+        PyArray1::from_vec(py, ids.iter().map(|&i| i64::from(i)).collect())
+    }
+
+    /// The landmarks' positions: (L, 2) float64 (x, y), in the order of `landmark_ids`.
+    #[getter]
+    fn landmarks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self
+            .graph
+            .landmarks
+            .positions
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        float_array(py, v, 2)
+    }
+
+    /// The landmark observations: (o, 2) int64 (pose id, landmark id), in file order.
+    #[getter]
+    fn observations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let marks = &self.graph.landmarks;
+        let v = marks
+            .observations
+            .iter()
+            .flat_map(|o| {
+                [
+                    i64::from(self.graph.ids[o.pose]),
+                    i64::from(marks.ids[o.landmark]),
+                ]
+            })
+            .collect();
+        id_array(py, v, 2)
+    }
+
+    /// The observations' measurements: (o, 2) float64 (dx, dy), the landmark in the pose's
+    /// frame.
+    #[getter]
+    fn observation_measurements<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let obs = &self.graph.landmarks.observations;
+        float_array(py, obs.iter().flat_map(|o| o.d).collect(), 2)
+    }
+
+    /// The observations' information matrices: (o, 3) float64 (I11 I12 I22).
+    #[getter]
+    fn observation_information<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let obs = &self.graph.landmarks.observations;
+        float_array(py, obs.iter().flat_map(|o| o.information.0).collect(), 3)
+    }
+
+    /// Number of poses.
+    #[getter]
+    fn num_poses(&self) -> usize {
+        self.graph.num_poses()
+    }
+
+    /// Number of edges.
+    #[getter]
+    fn num_edges(&self) -> usize {
+        self.graph.edges.len()
+    }
+
+    /// The file format it was read in ("g2o" or "toro"; "g2o" for a graph built from arrays).
+    #[getter]
+    fn format(&self) -> &'static str {
+        self.format.name()
+    }
+
+    /// How the file's noise values were read: "g2o", "toro-info", "toro-cov" or "g2o-cov".
+    #[getter]
+    fn dialect(&self) -> &'static str {
+        self.dialect.name()
+    }
+
+    /// Whether the poses came from vertex lines (else they were composed along a spanning tree
+    /// of the edges).
+    #[getter]
+    fn has_vertices(&self) -> bool {
+        self.graph.vertices_declared
+    }
+
+    /// The reader's warnings (`PATH:LINE:COL: warning: ...`, e.g. skipped unknown tags).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// Where the graph came from: its path, "<string>" for text, "<arrays>".
+    #[getter]
+    fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// This graph with another estimate: `poses` (n, 3) in the order of `ids`, and `landmarks`
+    /// (L, 2) if given (else the graph's). What `pgo-solve -o` writes is
+    /// `graph.with_poses(solution.poses, solution.landmarks)`.
+    #[pyo3(signature = (poses, landmarks=None))]
+    fn with_poses(
+        &self,
+        poses: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        landmarks: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    ) -> PyResult<Self> {
+        let mut graph = self.graph.clone();
+        let view = poses.as_array();
+        let rows = matrix("poses", &view, 3, Some(graph.num_poses()))?;
+        graph.poses = rows.iter().map(|r| Pose2::new(r[0], r[1], r[2])).collect();
+        graph.vertices_declared = true;
+        if let Some(l) = &landmarks {
+            let view = l.as_array();
+            let rows = matrix("landmarks", &view, 2, Some(graph.landmarks.len()))?;
+            graph.landmarks.positions = rows.iter().map(|r| [r[0], r[1]]).collect();
+            graph.landmarks.declared = true;
+        }
+        Ok(Graph {
+            graph,
+            format: self.format,
+            dialect: self.dialect,
+            warnings: self.warnings.clone(),
+            vertigo: self.vertigo.clone(),
+            source: self.source.clone(),
+        })
+    }
+
+    /// Writes the graph to `path` as pgo-convert does: `format` "g2o" or "toro" (default: from
+    /// the extension, .g2o or .graph, else the format it was read in), `dialect` the order and
+    /// kind of the noise values (default: the format's own, information matrices); vertices
+    /// sorted by id, edges in input order, FIX last, shortest round-trip numbers. Atomic: a
+    /// temporary file in the same directory renamed over `path` when complete.
+    #[pyo3(signature = (path, format=None, dialect=None))]
+    fn write(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        format: Option<&str>,
+        dialect: Option<&str>,
+    ) -> PyResult<()> {
+        let path = path_str(&path)?;
+        if path == "-" {
+            return Err(invalid(
+                "write: give a file path (to_text() returns the file's text)",
+            ));
+        }
+        let format = match format {
+            Some(f) => choice::<Format>("format", f)?,
+            None => Format::from_extension(path).unwrap_or(self.format),
+        };
+        let dialect = match dialect {
+            Some(d) => choice::<Dialect>("dialect", d)?,
+            None => format.default_dialect(),
+        };
+        self.write_to(py, path, format, dialect)
+    }
+
+    /// The graph as the text of a file in `format` ("g2o" by default if built from arrays, else
+    /// the format it was read in) and `dialect`, exactly the bytes `write` writes.
+    #[pyo3(signature = (format=None, dialect=None))]
+    fn to_text(
+        &self,
+        py: Python<'_>,
+        format: Option<&str>,
+        dialect: Option<&str>,
+    ) -> PyResult<String> {
+        let format = match format {
+            Some(f) => choice::<Format>("format", f)?,
+            None => self.format,
+        };
+        let dialect = match dialect {
+            Some(d) => choice::<Dialect>("dialect", d)?,
+            None => format.default_dialect(),
+        };
+        let dir = tempfile::tempdir()
+            .map_err(|e| to_py(py, pgo::Error::io("a temporary directory", e)))?;
+        let file = dir.path().join("graph");
+        let path = path_str(&file)?.to_string();
+        self.write_to(py, &path, format, dialect)?;
+        std::fs::read_to_string(&file).map_err(|e| to_py(py, pgo::Error::io(&path, e)))
+    }
+
+    fn __repr__(&self) -> String {
+        let g = &self.graph;
+        format!(
+            "<pgo.Graph: {} poses, {} edges{}{}, {} (dialect {}), from {}>",
+            g.num_poses(),
+            g.edges.len(),
+            if g.landmarks.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", {} landmarks, {} observations",
+                    g.landmarks.len(),
+                    g.landmarks.observations.len()
+                )
+            },
+            if g.fixed.is_empty() {
+                String::new()
+            } else {
+                format!(", {} fixed", g.fixed.len())
+            },
+            self.format.name(),
+            self.dialect.name(),
+            self.source
+        )
+    }
+
+    /// Whether two graphs hold the same poses, ids, edges, noise values (of the same kind),
+    /// fixed poses and landmarks (format, dialect, warnings and source aside).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        match other.cast::<Graph>() {
+            Ok(o) => {
+                let o = o.get();
+                self.graph == o.graph && self.vertigo == o.vertigo
+            }
+            Err(_) => false,
+        }
+    }
+}
+
+impl Graph {
+    fn write_to(
+        &self,
+        py: Python<'_>,
+        path: &str,
+        format: Format,
+        dialect: Dialect,
+    ) -> PyResult<()> {
+        if dialect.toro_order() != (format == Format::Toro) {
+            return Err(invalid(format!(
+                "dialect {dialect} does not fit {format} output (g2o files take g2o or g2o-cov, TORO files toro-info or toro-cov)"
+            )));
+        }
+        let mut graph = self.graph.clone();
+        graph.convert_noise(dialect.noise()).map_err(|k| {
+            invalid(format!(
+                "edge {} -> {} has a singular noise matrix that cannot be inverted for dialect {dialect}",
+                graph.ids[graph.edges[k].i], graph.ids[graph.edges[k].j]
+            ))
+        })?;
+        let vertigo = self.vertigo.as_ref();
+        py.detach(|| io::write_path_with(&graph, vertigo, WriteOptions { format, dialect }, path))
+            .map_err(|e| io_to_py(py, e))
+    }
+}
+
+fn read_options(
+    format: Option<&str>,
+    dialect: Option<&str>,
+    strict: bool,
+    ignore_equiv: bool,
+    allow_indefinite: bool,
+) -> PyResult<ReadOptions> {
+    Ok(ReadOptions {
+        format: format.map(|f| choice::<Format>("format", f)).transpose()?,
+        dialect: dialect
+            .map(|d| choice::<Dialect>("dialect", d))
+            .transpose()?,
+        strict,
+        ignore_equiv,
+        allow_indefinite,
+    })
+}
+
+/// Reads the graph file at `path` (pgo.read's path branch).
+#[pyfunction]
+#[pyo3(signature = (path, format=None, dialect=None, strict=false, ignore_equiv=false, allow_indefinite=false))]
+fn read_path(
+    py: Python<'_>,
+    path: PathBuf,
+    format: Option<&str>,
+    dialect: Option<&str>,
+    strict: bool,
+    ignore_equiv: bool,
+    allow_indefinite: bool,
+) -> PyResult<Graph> {
+    let options = read_options(format, dialect, strict, ignore_equiv, allow_indefinite)?;
+    let path = path_str(&path)?;
+    if path == "-" {
+        return Err(invalid("read: give a path or the text of a file, not '-'"));
+    }
+    let (graph, report) = py
+        .detach(|| io::read_path(path, &options))
+        .map_err(|e| io_to_py(py, e))?;
+    Ok(Graph::from_read(graph, report, path.to_string()))
+}
+
+/// Reads a graph from the bytes of a file (pgo.read's text branch); `name` is the path its
+/// errors name.
+#[pyfunction]
+#[pyo3(signature = (data, name="<string>", format=None, dialect=None, strict=false, ignore_equiv=false, allow_indefinite=false))]
+#[allow(clippy::too_many_arguments)]
+fn read_bytes(
+    py: Python<'_>,
+    data: &[u8],
+    name: &str,
+    format: Option<&str>,
+    dialect: Option<&str>,
+    strict: bool,
+    ignore_equiv: bool,
+    allow_indefinite: bool,
+) -> PyResult<Graph> {
+    let options = read_options(format, dialect, strict, ignore_equiv, allow_indefinite)?;
+    let (graph, report) = py
+        .detach(|| io::read(data, name, &options))
+        .map_err(|e| io_to_py(py, e))?;
+    Ok(Graph::from_read(graph, report, name.to_string()))
+}
+
+fn check_tolerance(tol: f64) -> PyResult<()> {
+    if tol.is_finite() && tol >= 0.0 {
+        Ok(())
+    } else {
+        Err(PyValueError::new_err(format!(
+            "tol must be a finite number >= 0, found {tol}"
+        )))
+    }
+}
+
+/// Solves the graph (pgo.solve): the `pgo-solve --json --no-timings` report as JSON text, the
+/// estimate (n, 3) and the landmark positions (L, 2).
+#[pyfunction]
+#[pyo3(signature = (graph, weights="isotropic", tol=1e-6, method="auto", solver="ipm", max_rank=6, staircase_budget=200.0, refine=false))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn solve<'py>(
+    py: Python<'py>,
+    graph: &Bound<'py, Graph>,
+    weights: &str,
+    tol: f64,
+    method: &str,
+    solver: &str,
+    max_rank: usize,
+    staircase_budget: f64,
+    refine: bool,
+) -> PyResult<(String, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+    check_tolerance(tol)?;
+    if !(1..=64).contains(&max_rank) {
+        return Err(PyValueError::new_err(format!(
+            "max_rank must be from 1 to 64, found {max_rank}"
+        )));
+    }
+    if !(staircase_budget.is_finite() && staircase_budget >= 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "staircase_budget must be a finite number >= 0, found {staircase_budget}"
+        )));
+    }
+    let options = pgo::SolveOptions {
+        method: choice("method", method)?,
+        solver: choice("solver", solver)?,
+        weights: choice("weights", weights)?,
+        tolerance: tol,
+        refine,
+        max_rank,
+        staircase_budget: staircase_budget * 1e9,
+    };
+    let g = graph.get();
+    let solution = py
+        .detach(|| pgo::solve(&g.graph, &options))
+        .map_err(|e| to_py(py, e))?;
+    let report = pgo::cli::solve::Report::new(&solution, None, g.warnings.clone(), None);
+    let json = pgo::cli::common::to_json_line(&report).map_err(|e| to_py(py, e))?;
+    let poses = solution.estimate.iter().flat_map(|p| p.values()).collect();
+    let landmarks = solution
+        .landmark_estimate
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    Ok((
+        json,
+        float_array(py, poses, 3)?,
+        float_array(py, landmarks, 2)?,
+    ))
+}
+
+/// Certifies an estimate (pgo.certify): the `pgo-certify --json` report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (graph, poses=None, landmarks=None, weights="isotropic", tol=1e-6))]
+fn certify(
+    py: Python<'_>,
+    graph: &Bound<'_, Graph>,
+    poses: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    landmarks: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    weights: &str,
+    tol: f64,
+) -> PyResult<String> {
+    check_tolerance(tol)?;
+    let g = graph.get();
+    let n = g.graph.num_poses();
+    let marks = &g.graph.landmarks;
+    let mut estimate: Vec<Pose2> = match &poses {
+        None => {
+            if !g.graph.vertices_declared {
+                return Err(invalid(format!(
+                    "{}: the file has no vertex lines, so there is no estimate to certify (pass poses)",
+                    g.source
+                )));
+            }
+            g.graph.poses.clone()
+        }
+        Some(p) => {
+            let view = p.as_array();
+            let rows = matrix("poses", &view, 3, Some(n))?;
+            rows.iter().map(|r| Pose2::new(r[0], r[1], r[2])).collect()
+        }
+    };
+    let positions: Vec<[f64; 2]> = match &landmarks {
+        None if marks.is_empty() => Vec::new(),
+        None if poses.is_none() && marks.declared => marks.positions.clone(),
+        None => {
+            return Err(invalid(format!(
+                "the graph has {} landmarks: pass their positions as landmarks, shape ({}, 2)",
+                marks.len(),
+                marks.len()
+            )));
+        }
+        Some(l) => {
+            let view = l.as_array();
+            let rows = matrix("landmarks", &view, 2, Some(marks.len()))?;
+            rows.iter().map(|r| [r[0], r[1]]).collect()
+        }
+    };
+    estimate.extend(positions.iter().map(|&[x, y]| Pose2::new(x, y, 0.0)));
+    let options = pgo::solve::CertifyOptions {
+        weights: choice("weights", weights)?,
+        tolerance: tol,
+    };
+    let source = if poses.is_some() {
+        "<poses>"
+    } else {
+        g.source.as_str()
+    };
+    let report = py
+        .detach(|| pgo::certify_estimate(&g.graph, &estimate, &options, source))
+        .map_err(|e| to_py(py, e))?;
+    let json = pgo::cli::certify::JsonReport {
+        report: &report,
+        warnings: g.warnings.clone(),
+    };
+    pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))
+}
+
+/// The graph's spectra (pgo.spectrum): the `pgo-spectrum --json` report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (graph, k=0, weights="isotropic", solver="ipm"))]
+fn spectrum(
+    py: Python<'_>,
+    graph: &Bound<'_, Graph>,
+    k: usize,
+    weights: &str,
+    solver: &str,
+) -> PyResult<String> {
+    let options = pgo::spectrum::SpectrumOptions {
+        weights: choice("weights", weights)?,
+        count: k,
+        solver: choice("solver", solver)?,
+    };
+    let g = graph.get();
+    let report = py
+        .detach(|| pgo::spectrum::spectrum(&g.graph, &options))
+        .map_err(|e| to_py(py, e))?;
+    let json = pgo::cli::spectrum::JsonReport {
+        report: &report,
+        warnings: g.warnings.clone(),
+    };
+    pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))
+}
+
+/// The extension module of the Python package `pgo` (see pgo/__init__.py).
+#[pymodule]
+fn _pgo(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<Graph>()?;
+    m.add_function(wrap_pyfunction!(read_path, m)?)?;
+    m.add_function(wrap_pyfunction!(read_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(certify, m)?)?;
+    m.add_function(wrap_pyfunction!(spectrum, m)?)?;
+    m.add("PgoError", py.get_type::<PgoError>())?;
+    m.add("ParseError", py.get_type::<ParseError>())?;
+    m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
