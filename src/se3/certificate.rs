@@ -308,37 +308,56 @@ impl Certifier3 {
         })
     }
 
-    /// LLᵀ of D(S + ηP)D − αI for η = eta_max·16^{−j} downward while it succeeds (the last
-    /// success kept), or upward from eta_max (four times) for a weaker bound.
+    /// LLᵀ of D(S + ηP)D − αI: η = eta_max first, then down by factors of 16 while it
+    /// succeeds and a log-scale bisection between the last success and the first failure (the
+    /// smallest η proven to within a factor 1.2), or, where eta_max fails, up by factors of 16
+    /// (four times) for a weaker bound.
     pub fn certify_cholesky(
         &mut self,
         problem: &Problem3,
         lambda: &[[[f64; 3]; 3]],
         eta_max: f64,
     ) -> Option<Bound3> {
-        let mut best: Option<f64> = None;
-        let mut eta = eta_max.max(f64::MIN_POSITIVE);
-        if self.try_eta(problem, lambda, eta) {
-            best = Some(eta);
-            for _ in 0..6 {
-                eta /= 16.0;
-                if !self.try_eta(problem, lambda, eta) {
-                    break;
-                }
-                best = Some(eta);
-            }
-        } else {
+        if !(eta_max.is_finite() && eta_max > 0.0) {
+            return None;
+        }
+        let mut hi = eta_max;
+        let mut proven = self.try_eta(problem, lambda, hi);
+        if !proven {
             for _ in 0..4 {
-                eta *= 16.0;
-                if self.try_eta(problem, lambda, eta) {
-                    best = Some(eta);
+                hi *= 16.0;
+                if self.try_eta(problem, lambda, hi) {
+                    proven = true;
                     break;
                 }
             }
         }
-        best.map(|eta| Bound3 {
-            eta,
-            lower_bound: dual_value(lambda, eta),
+        if !proven {
+            return None;
+        }
+        let mut lo = None;
+        for _ in 0..12 {
+            let eta = hi / 16.0;
+            if self.try_eta(problem, lambda, eta) {
+                hi = eta;
+            } else {
+                lo = Some(eta);
+                break;
+            }
+        }
+        if let Some(mut lo) = lo {
+            for _ in 0..4 {
+                let mid = (lo * hi).sqrt();
+                if self.try_eta(problem, lambda, mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+        }
+        Some(Bound3 {
+            eta: hi,
+            lower_bound: dual_value(lambda, hi),
             gap: None,
             deflated: None,
         })

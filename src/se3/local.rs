@@ -440,8 +440,8 @@ pub fn optimize(
                 bases = (0..problem.n)
                     .map(|u| pose_basis(problem, &x, u, p))
                     .collect();
-                (values, grad) = hessian(problem, &sys, &x, &qx, &bases);
-                gradient_norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+                let (_, g) = hessian(problem, &sys, &x, &qx, &bases);
+                gradient_norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
                 converged = true;
                 break;
             }

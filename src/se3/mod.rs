@@ -146,14 +146,30 @@ pub fn solve_graph3(
     options: &Options3,
     report: &mut dyn FnMut(Step3),
 ) -> Solution3 {
+    solve_graph3_from(graph, weights, None, options, report)
+}
+
+/// As [`solve_graph3`] from given poses (in the graph's order) instead of the chordal start.
+pub fn solve_graph3_from(
+    graph: &Graph3,
+    weights: &[Weight3],
+    start: Option<&[Rt]>,
+    options: &Options3,
+    report: &mut dyn FnMut(Step3),
+) -> Solution3 {
     let problem = Problem3::new(graph, weights, anchor_of(graph));
     let mut translations = Translations::new(&problem);
     let mut certifier = Certifier3::new(&problem);
     let local = LocalOptions {
         max_iterations: options.max_iterations,
     };
-    crate::progress::phase("chordal initialization");
-    let start = chordal(&problem);
+    let start = match start {
+        Some(poses) => point_of(&problem, poses),
+        None => {
+            crate::progress::phase("chordal initialization");
+            chordal(&problem)
+        }
+    };
     crate::progress::phase("Riemannian Newton, rank 3");
     let first = optimize(&problem, &mut translations, start, &local, report);
     let mut iterations = first.iterations;
@@ -201,7 +217,8 @@ pub fn solve_graph3(
             // bound does not certify the rounded estimate within the tolerance.
             let ev = problem.evaluate(&current);
             let lambda = problem.multipliers(&current, &ev.qx);
-            if let Some(b) = certifier.certify_cholesky(&problem, &lambda, f64::INFINITY) {
+            let reach = ev.cost.max(certificate::dual_value(&lambda, 0.0)) / (3.0 * problem.n as f64);
+            if let Some(b) = certifier.certify_cholesky(&problem, &lambda, reach) {
                 relaxation_bound = Some(b.lower_bound);
             }
             why = Some(
@@ -220,6 +237,25 @@ pub fn solve_graph3(
         iterations += lifted.iterations;
         work += lifted.work;
         current = lifted.point;
+        if std::env::var("SE3_DEBUG").is_ok() {
+            let p = current.p;
+            let mut g = nalgebra::DMatrix::<f64>::zeros(p, p);
+            for r in 0..problem.dim() {
+                let row = current.row(r);
+                for c in 0..p {
+                    for d in 0..p {
+                        g[(c, d)] += row[c] * row[d];
+                    }
+                }
+            }
+            eprintln!(
+                "rank {rank}: f {:.12e} conv {} grad {:.2e} sv {:?}",
+                lifted.cost,
+                lifted.converged,
+                lifted.gradient_norm,
+                g.symmetric_eigenvalues().as_slice()
+            );
+        }
         let rounded = round_to_rank3(&problem, &current);
         let polished = optimize(&problem, &mut translations, rounded, &local, report);
         iterations += polished.iterations;
