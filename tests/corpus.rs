@@ -142,7 +142,9 @@ fn every_malformed_3d_input_is_an_error_at_its_place() {
             let output = dir.file(&format!("out-{name}"), b"precious\n");
             let out = run_tool(&tool, &input, Some(&output), &flags(flag_field));
             let what = format!("{} {name}", tool.name);
-            let expected = if ["pgo-convert", "pgo-solve", "pgo-certify"].contains(&tool.name.as_str()) {
+            let expected = if ["pgo-convert", "pgo-solve", "pgo-certify"]
+                .contains(&tool.name.as_str())
+            {
                 format!("{}:{at}: error: {message}\n", s(&input))
             } else {
                 let (line, tag) = first_3d_tag(&content);

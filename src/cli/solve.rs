@@ -474,12 +474,20 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 /// given.
 fn refuse3(args: &Args) -> crate::Result<()> {
     let refused = [
-        (args.refine, "--refine (Levenberg-Marquardt under the full information)"),
+        (
+            args.refine,
+            "--refine (Levenberg-Marquardt under the full information)",
+        ),
         (args.marginals.is_some(), "--marginals"),
         (args.robust.is_some(), "--robust (graduated non-convexity)"),
-        (args.method == Method::Sdp, "--method sdp (the dual SDP of Algorithm 1 is planar)"),
         (
-            args.rerun.rerun_save.is_some() || args.rerun.rerun_connect.is_some() || args.rerun.rerun_spawn,
+            args.method == Method::Sdp,
+            "--method sdp (the dual SDP of Algorithm 1 is planar)",
+        ),
+        (
+            args.rerun.rerun_save.is_some()
+                || args.rerun.rerun_connect.is_some()
+                || args.rerun.rerun_spawn,
             "--rerun-save, --rerun-connect, --rerun-spawn (3D graphs are not recorded yet)",
         ),
     ];
@@ -547,7 +555,9 @@ fn run3(
     let write_s = t2.elapsed().as_secs_f64();
     progress.finish();
     if args.solver.is_some() {
-        eprintln!("pgo-solve: warning: --solver had no effect: 3D graphs are solved by the staircase");
+        eprintln!(
+            "pgo-solve: warning: --solver had no effect: 3D graphs are solved by the staircase"
+        );
     }
     let report = Report3 {
         solution: &solution,
@@ -588,13 +598,18 @@ fn text_report3(input: &str, report: &Report3) -> String {
         r.components.len(),
         plural(r.components.len()),
         r.weights.name(),
-        r.components.iter().filter_map(|c| c.rank).max().unwrap_or(3),
+        r.components
+            .iter()
+            .filter_map(|c| c.rank)
+            .max()
+            .unwrap_or(3),
     );
     let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     out += &row("cost", num(r.cost));
     out += &row(
         "chi2 (g2o)",
-        r.chi2.map_or("undefined (TORO information over Euler angles)".into(), num),
+        r.chi2
+            .map_or("undefined (TORO information over Euler angles)".into(), num),
     );
     out += &row("lower bound", num(r.lower_bound));
     out += &row(
@@ -623,7 +638,11 @@ fn text_report3(input: &str, report: &Report3) -> String {
                     c.first_id,
                     num(c.cost),
                     num(c.lower_bound),
-                    if c.certified { "certified" } else { "not certified" }
+                    if c.certified {
+                        "certified"
+                    } else {
+                        "not certified"
+                    }
                 ),
             );
         }

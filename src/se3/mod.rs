@@ -191,6 +191,7 @@ pub fn solve_graph3_from(
     let mut current = first.point;
     let mut relaxation_bound: Option<f64> = None;
     let mut why: Option<String> = None;
+    let mut previous = f64::INFINITY;
     while !certified(&best) {
         if rank >= options.max_rank {
             why = Some(format!("the staircase reached its largest rank {rank}"));
@@ -212,21 +213,17 @@ pub fn solve_graph3_from(
             .iter()
             .map(|t| t.kappa + t.tau)
             .fold(0.0f64, f64::max);
-        if curvature >= -1e-10 * scale {
-            // No descent direction at this rank: the relaxation's optimum is reached but the
-            // bound does not certify the rounded estimate within the tolerance.
-            let ev = problem.evaluate(&current);
-            let lambda = problem.multipliers(&current, &ev.qx);
-            let reach = ev.cost.max(certificate::dual_value(&lambda, 0.0)) / (3.0 * problem.n as f64);
-            if let Some(b) = certifier.certify_cholesky(&problem, &lambda, reach) {
-                relaxation_bound = Some(b.lower_bound);
-            }
+        // A curvature within the accuracy of the local optimum (or a lift that no longer lowers
+        // f): the relaxation's optimum is reached as far as the iterates tell.
+        let cost_now = problem.cost(&current);
+        if curvature >= -1e-7 * scale || (previous - cost_now) <= 1e-10 * cost_now.abs() {
             why = Some(
-                "the certificate matrix is not proven positive semidefinite within the tolerance"
+                "the relaxation's optimum does not round to a certified estimate (the relaxation is not exact, or not within the tolerance)"
                     .into(),
             );
             break;
         }
+        previous = cost_now;
         let Some(escaped) = escape(&problem, &mut translations, &current, &v) else {
             why = Some("no descent along the direction of negative curvature".into());
             break;
@@ -237,25 +234,6 @@ pub fn solve_graph3_from(
         iterations += lifted.iterations;
         work += lifted.work;
         current = lifted.point;
-        if std::env::var("SE3_DEBUG").is_ok() {
-            let p = current.p;
-            let mut g = nalgebra::DMatrix::<f64>::zeros(p, p);
-            for r in 0..problem.dim() {
-                let row = current.row(r);
-                for c in 0..p {
-                    for d in 0..p {
-                        g[(c, d)] += row[c] * row[d];
-                    }
-                }
-            }
-            eprintln!(
-                "rank {rank}: f {:.12e} conv {} grad {:.2e} sv {:?}",
-                lifted.cost,
-                lifted.converged,
-                lifted.gradient_norm,
-                g.symmetric_eigenvalues().as_slice()
-            );
-        }
         let rounded = round_to_rank3(&problem, &current);
         let polished = optimize(&problem, &mut translations, rounded, &local, report);
         iterations += polished.iterations;
@@ -270,6 +248,16 @@ pub fn solve_graph3_from(
                 gradient_norm,
                 bound,
             };
+        }
+    }
+    if !certified(&best) && current.p > 3 {
+        // The bound of the relaxation at the last rank's point (valid whatever that point is:
+        // any Λ with S(Λ) + ηP ⪰ 0 proven bounds f*).
+        let ev = problem.evaluate(&current);
+        let lambda = problem.multipliers(&current, &ev.qx);
+        let reach = ev.cost.max(certificate::dual_value(&lambda, 0.0)) / (3.0 * problem.n as f64);
+        if let Some(b) = certifier.certify_cholesky(&problem, &lambda, reach) {
+            relaxation_bound = Some(b.lower_bound);
         }
     }
     let mut lower_bound = best.bound.map_or(0.0, |b| b.lower_bound).max(0.0);

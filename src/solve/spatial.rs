@@ -337,7 +337,10 @@ pub fn certify_estimate3(
             suboptimality_bound,
             certified: within(suboptimality_bound, own.cost, tol),
             bound_from,
-            eta: own.bound.filter(|_| bound_from == "estimate").map(|b| b.eta),
+            eta: own
+                .bound
+                .filter(|_| bound_from == "estimate")
+                .map(|b| b.eta),
             gradient_norm: own.gradient_norm,
             near_zero_eigenvalues: own.bound.and_then(|b| b.deflated),
         });
