@@ -595,7 +595,7 @@ impl Rayleigh3 {
     fn check(&self, theta: f64, rotation_scale: f64, eta: f64) -> bool {
         let k = self.k;
         let rho = theta + eta.min(0.0) * rotation_scale * (1.0 + 4.0 * U);
-        if !(rho > 0.0) {
+        if rho.is_nan() || rho <= 0.0 {
             return false;
         }
         let mut kmat = vec![0.0; k * k];
@@ -647,7 +647,7 @@ impl Rayleigh3 {
             .map(|a| self.y[a * k + a])
             .fold(f64::INFINITY, f64::min);
         let bmax: f64 = (0..k).map(|a| self.b0[a * k + a]).sum();
-        if !(ymin > 0.0) {
+        if ymin.is_nan() || ymin <= 0.0 {
             return None;
         }
         let floor = -0.25 * theta / (rotation_scale * (1.0 + 4.0 * U));

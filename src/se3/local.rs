@@ -423,7 +423,7 @@ pub fn optimize(
             damping: mu,
         });
         let negligible = predicted <= 1e-13 * cost + 1e-24 * total_weight;
-        if negligible && !(actual > 0.0) {
+        if negligible && (actual.is_nan() || actual <= 0.0) {
             // Converged: no step predicts a decrease above the rounding of f.
             converged = true;
             break;

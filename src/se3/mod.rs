@@ -17,6 +17,10 @@
 //!
 //! May use: [`crate::linalg`], [`crate::graph3`] (the file layer), [`crate::progress`].
 
+// The 3x3 blocks and their rows, columns and local rows are indexed as in the formulas they
+// implement (R̃_ab, Λ_i[a][b], Q's block [la][lb]): iterator chains would hide the math.
+#![allow(clippy::needless_range_loop)]
+
 pub mod certificate;
 pub mod local;
 pub mod problem;
