@@ -19,7 +19,7 @@ Examples:
 
 Exit status: 0 certified within --tol, 1 not certified (the bound printed still holds), 2 error.";
 
-/// Certify an estimate of a planar pose graph, or bound how far it is from optimal.
+/// Certify an estimate of a planar or 3D pose graph, or bound how far it is from optimal.
 ///
 /// The estimate's own Lagrange multipliers lambda (first-order conditions, eq. (33)) are tested:
 /// a proof that W(lambda) + eta*blkdiag(0, I) is positive semidefinite (the inertia of one sparse
@@ -39,6 +39,11 @@ Exit status: 0 certified within --tol, 1 not certified (the bound printed still 
 /// optimum of another objective, so pgo-certify reports it NOT certified, with a proven bound on
 /// how far its cost is above the optimum of f (intel: about 4% relative): that answer is right.
 /// The estimate pgo-solve writes without --refine is the one that can be certified.
+///
+/// 3D graphs: SE-Sync's objective and weights (see pgo-solve --help); the estimate's
+/// multipliers Lambda_i = sym((QX)_i X_i^T) and the proof that S + eta*P is positive
+/// semidefinite (LDL^T inertia and the Lehmann-Maehly bound for the estimate's three null
+/// directions, or a Cholesky factorization) give the bound sum tr(Lambda_i) - 3n*eta.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-certify", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {

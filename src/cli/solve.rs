@@ -47,7 +47,7 @@ solved again: cost, bound and \"certified\" are of that inlier set's problem, no
 problem. The report lists every rejected edge (line, ids, r^2 at the final estimate). -o writes
 every edge as read, --drop-outliers only the inliers.";
 
-/// Solve a planar pose graph to global optimality and prove it.
+/// Solve a planar or 3D pose graph to global optimality and prove it.
 ///
 /// Small graphs (--method sdp) run the paper's Algorithm 1: the dual SDP (31), the single zero
 /// eigenvalue property (SZEP) of the penalized pose graph matrix W(lambda*), its scaled null
@@ -58,6 +58,14 @@ every edge as read, --drop-outliers only the inliers.";
 /// fails. The report gives the cost of the estimate, a proven lower bound on the optimum and
 /// their difference, which bounds the suboptimality; "certified" means that bound is within
 /// --tol. Each connected component is solved on its own.
+///
+/// 3D graphs (g2o VERTEX_SE3:QUAT/EDGE_SE3:QUAT, TORO VERTEX3/EDGE3) are SE-Sync's problem
+/// (Rosen et al. 2019): f = sum kappa*||R_j - R_i*R_ij||_F^2 + tau*||t_j - t_i - R_i*t_ij||^2,
+/// tau = 3/tr(inv(Omega_tt)), kappa = 3/(2*tr(inv(Omega_RR))), solved by the staircase on
+/// St(3, p)^n from rank 3 (--max-rank P: P - 1 lifts, up to rank P + 2) and certified by the
+/// inertia of one sparse LDL^T of S = Q - SymBlockDiag(Lambda) and the Lehmann-Maehly bound for
+/// its three null directions. --refine, --marginals, --robust and --method sdp do not apply to
+/// 3D graphs yet (exit status 2).
 #[derive(Debug, Parser)]
 #[command(name = "pgo-solve", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
