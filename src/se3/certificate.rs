@@ -13,7 +13,8 @@
 //! factorization resolves. So the proof deflates them, the block generalization of the planar
 //! rank-1 proof: with D a power-of-two equilibration, T(η) = D(S + ηP)D and Z = D⁻¹X (N×k),
 //!
-//! 1. the gap: an LDLᵀ of D S D − μI (exact inertia of a matrix within its a-posteriori backward
+//! 1. the gap (the planar certificate's shift ladder, [`crate::certify::ladder`]): an LDLᵀ of
+//!    D S D − μI (exact inertia of a matrix within its a-posteriori backward
 //!    error, [`SparseFactor::ldlt_backward_error`], plus the rounding of Q's assembly and of the
 //!    shift) with at most k negative pivots proves λ_{k+1}(T(η)) ≥ θ = μ − error (Sylvester,
 //!    Weyl; ηDPD ⪰ 0 for η ≥ 0);
@@ -32,6 +33,7 @@
 //! [`crate::certify::SparseCertifier::certify_cholesky`]).
 
 use super::problem::{Point3, Problem3};
+use crate::certify::ladder::{Ladder, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
 use crate::linalg::roundoff::{U, gamma};
 
@@ -139,7 +141,7 @@ impl Certifier3 {
             if !(a > 0.0 && a.is_finite()) {
                 return None;
             }
-            scale[k] = 2f64.powi(-((a.log2() / 2.0).floor() as i32));
+            scale[k] = power_of_two_scale(a);
         }
         Some(scale)
     }
@@ -207,8 +209,8 @@ impl Certifier3 {
         ))
     }
 
-    /// θ ≤ λ_{k+1}(D S D) by the inertia of D S D − μI (μ from 1/16 down by 64 while more than
-    /// k pivots are negative; at most 8 factorizations).
+    /// θ ≤ λ_{k+1}(D S D) by the inertia of D S D − μI: the planar certificate's shift ladder
+    /// ([`isolate`]) with k in place of 1.
     fn gap(
         &mut self,
         lambda: &[[[f64; 3]; 3]],
@@ -217,46 +219,22 @@ impl Certifier3 {
         n1: usize,
     ) -> Option<(f64, usize)> {
         let assembly = self.assembly_error(scale);
-        let mut mu = self
+        let start = self
             .last_mu
             .map_or(1.0 / 16.0, |m| (64.0 * m).min(1.0 / 16.0));
-        let mut above: Option<f64> = None;
-        for _ in 0..8 {
-            match self.inertia_at(lambda, scale, mu, n1) {
-                Some((negative, error)) if negative <= k => {
-                    let theta = mu - error - assembly;
-                    if theta > 0.0 {
-                        self.last_mu = Some(mu);
-                        return Some((theta, negative));
-                    }
-                    if let Some(mut hi) = above {
-                        for _ in 0..3 {
-                            let mid = (mu * hi).sqrt();
-                            match self.inertia_at(lambda, scale, mid, n1) {
-                                Some((negative, error)) if negative <= k => {
-                                    let theta = mid - error - assembly;
-                                    if theta > 0.0 {
-                                        self.last_mu = Some(mid);
-                                        return Some((theta, negative));
-                                    }
-                                    mu = mid;
-                                }
-                                _ => hi = mid,
-                            }
-                        }
-                    }
-                    return None;
-                }
-                _ => {
-                    above = Some(mu);
-                    mu /= 64.0;
-                }
+        match isolate(k, start, assembly, |mu| {
+            Some(self.inertia_at(lambda, scale, mu, n1))
+        }) {
+            Ladder::Found {
+                theta,
+                negative,
+                mu,
+            } => {
+                self.last_mu = Some(mu);
+                Some((theta, negative))
             }
-            if mu < 4.0 * assembly {
-                break;
-            }
+            Ladder::Hidden { .. } | Ladder::Failed => None,
         }
-        None
     }
 
     /// Proves S + ηP ⪰ 0 at the multipliers of `x` for the smallest η it finds ≤ `eta_max`

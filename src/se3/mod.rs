@@ -15,7 +15,8 @@
 //!   negative curvature of S to rank p + 1, the local optimum there rounded back to rank 3 and
 //!   polished, certified again.
 //!
-//! May use: [`crate::linalg`], [`crate::graph3`] (the file layer), [`crate::progress`].
+//! May use: [`crate::certify`] (the shift ladder and equilibration it shares with the planar
+//! certificate), [`crate::linalg`], [`crate::graph3`] (the file layer), [`crate::progress`].
 
 // The 3x3 blocks and their rows, columns and local rows are indexed as in the formulas they
 // implement (R̃_ab, Λ_i[a][b], Q's block [la][lb]): iterator chains would hide the math.
