@@ -126,6 +126,9 @@ struct System {
     /// Index of the first value of each pair's block in the value list.
     diagonal: Vec<usize>,
     count: usize,
+    /// The elimination order (`order[new] = old` coordinate) and room for a permuted vector.
+    order: Vec<usize>,
+    permuted: Vec<f64>,
 }
 
 impl System {
@@ -162,7 +165,6 @@ impl System {
             }
         }
         let count = pattern.len();
-        let assembly = Assembly::<f64>::new(dim, &pattern);
         let mut group = vec![0; dim];
         for u in 0..n {
             for k in offset[u]..offset[u + 1] {
@@ -170,8 +172,15 @@ impl System {
             }
         }
         let order = group_ordering(&problem.pose_rank, &group);
-        let factor =
-            SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order, Layout::Auto);
+        // As the planar Newton system: supernodal, assembled directly in its elimination order
+        // and triangle (faer then factors it without a permuted copy).
+        let layout = Layout::Supernodal;
+        let assembly = Assembly::permuted(dim, &pattern, &order, layout.stored_side());
+        let factor = SparseFactor::analyze_in_order(
+            assembly.matrix.symbolic(),
+            layout.stored_side(),
+            layout,
+        );
         System {
             p,
             offset,
@@ -180,6 +189,19 @@ impl System {
             factor,
             diagonal,
             count,
+            permuted: vec![0.0; order.len()],
+            order,
+        }
+    }
+
+    /// Solves the last factorization's system in place (coordinates in the pose order).
+    fn solve_in_place(&mut self, b: &mut [f64]) {
+        for (p, &old) in self.permuted.iter_mut().zip(&self.order) {
+            *p = b[old];
+        }
+        self.factor.solve_in_place(&mut self.permuted);
+        for (p, &old) in self.permuted.iter().zip(&self.order) {
+            b[old] = *p;
         }
     }
 
@@ -224,7 +246,7 @@ fn hessian(
     let p = sys.p;
     let lambda = lambda_blocks(problem, x, qx);
     let mut values = Vec::with_capacity(sys.count);
-    let mut kron = vec![0.0; 4 * p * 4 * p];
+    let mut kb: Vec<f64> = Vec::new();
     for (k, &(u, v)) in problem.pairs.iter().enumerate() {
         let (du, dv) = (sys.dims[u], sys.dims[v]);
         if du == 0 || dv == 0 {
@@ -239,22 +261,22 @@ fn hessian(
                 }
             }
         }
-        kron.fill(0.0);
-        for la in 0..4 {
-            for lb in 0..4 {
-                for c in 0..p {
-                    kron[(la * p + c) * 4 * p + lb * p + c] = s[la][lb];
-                }
-            }
-        }
         let (bu, bv) = (&bases[u], &bases[v]);
-        // K B_v (4p × dv), then 2 B_uᵀ (K B_v).
-        let mut kb = vec![0.0; 4 * p * dv];
+        // (S_uv ⊗ I_p) B_v (4p × dv), row (la, c) = Σ_lb S[la][lb] B_v[(lb, c)].
+        kb.clear();
+        kb.resize(4 * p * dv, 0.0);
         for b in 0..dv {
             let col = &bv[b * 4 * p..(b + 1) * 4 * p];
-            for r in 0..4 * p {
-                let row = &kron[r * 4 * p..(r + 1) * 4 * p];
-                kb[b * 4 * p + r] = row.iter().zip(col).map(|(a, c)| a * c).sum();
+            let out = &mut kb[b * 4 * p..(b + 1) * 4 * p];
+            for la in 0..4 {
+                for lb in 0..4 {
+                    let q = s[la][lb];
+                    if q != 0.0 {
+                        for c in 0..p {
+                            out[la * p + c] += q * col[lb * p + c];
+                        }
+                    }
+                }
             }
         }
         for a in 0..du {
@@ -357,7 +379,7 @@ pub fn optimize(
             continue;
         }
         let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
-        sys.factor.solve_in_place(&mut delta);
+        sys.solve_in_place(&mut delta);
         // Predicted decrease −(gᵀδ + ½ δᵀHδ), H applied through the stored upper triangle.
         let mut hd = vec![0.0; dim];
         let mut k = 0;
@@ -422,7 +444,7 @@ pub fn optimize(
             gradient_norm,
             damping: mu,
         });
-        let negligible = predicted <= 1e-13 * cost + 1e-24 * total_weight;
+        let negligible = predicted <= 1e-12 * cost + 1e-24 * total_weight;
         if negligible && (actual.is_nan() || actual <= 0.0) {
             // Converged: no step predicts a decrease above the rounding of f.
             converged = true;
