@@ -56,6 +56,7 @@ pub mod problem;
 pub mod progress;
 pub mod refine;
 pub mod robust;
+pub mod se3;
 pub mod simulate;
 pub mod solve;
 pub mod spectrum;

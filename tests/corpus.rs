@@ -121,9 +121,10 @@ fn first_3d_tag(content: &[u8]) -> (usize, String) {
         .unwrap()
 }
 
-/// The malformed 3D corpus (`tests/malformed3d/`): pgo-convert, which reads 3D files, reports
-/// each at the place and with the message of `tests/malformed3d/cases.tsv`; every other tool
-/// refuses it at its first 3D tag (3D solving is not yet supported). Status 2, one line on
+/// The malformed 3D corpus (`tests/malformed3d/`): the tools that read 3D files (pgo-convert,
+/// pgo-solve, pgo-certify) report each at the place and with the message of
+/// `tests/malformed3d/cases.tsv`; every other tool refuses it at its first 3D tag (it handles
+/// planar graphs only). Status 2, one line on
 /// stderr, nothing on stdout, an existing output left untouched.
 #[test]
 fn every_malformed_3d_input_is_an_error_at_its_place() {
@@ -141,12 +142,14 @@ fn every_malformed_3d_input_is_an_error_at_its_place() {
             let output = dir.file(&format!("out-{name}"), b"precious\n");
             let out = run_tool(&tool, &input, Some(&output), &flags(flag_field));
             let what = format!("{} {name}", tool.name);
-            let expected = if tool.name == "pgo-convert" {
+            let expected = if ["pgo-convert", "pgo-solve", "pgo-certify"]
+                .contains(&tool.name.as_str())
+            {
                 format!("{}:{at}: error: {message}\n", s(&input))
             } else {
                 let (line, tag) = first_3d_tag(&content);
                 format!(
-                    "{}:{line}:1: error: 3D pose graph (tag {tag}): 3D solving is not yet supported; this tool handles planar SE(2) graphs (pgo-convert reads, writes and describes 3D files)\n",
+                    "{}:{line}:1: error: 3D pose graph (tag {tag}): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files; pgo-convert reads, writes and describes them)\n",
                     s(&input)
                 )
             };

@@ -274,8 +274,16 @@ fn frh_g2o_and_toro_versions_carry_the_same_information() {
 #[test]
 fn three_d_and_landmark_files_get_specific_errors() {
     for (name, needle, line) in [
-        ("tinyGrid3D.g2o", "3D solving is not yet supported", 1),
-        ("smallGrid3D.g2o", "3D solving is not yet supported", 1),
+        (
+            "tinyGrid3D.g2o",
+            "this tool handles planar SE(2) graphs only",
+            1,
+        ),
+        (
+            "smallGrid3D.g2o",
+            "this tool handles planar SE(2) graphs only",
+            1,
+        ),
         (
             "example.graph",
             "this landmark type is not supported (tag BR)",

@@ -16,7 +16,7 @@ const FLOORS: &[&[&str]] = &[
     &["linalg"],
     &["problem", "simulate", "eval"],
     &["certify"],
-    &["staircase", "dual", "refine"],
+    &["staircase", "dual", "refine", "se3"],
     &["spectrum"],
     &["solve", "viz"],
     &["robust"],

@@ -3,11 +3,13 @@
 //! of the computation that proves W̃(λ) ⪰ 0 accounted for. Dense for small graphs ([`dense`]:
 //! eigenvalues with a backward-error allowance), sparse for large ones ([`sparse`]: LDLᴴ inertia
 //! and Temple's inequality for a deflated rank-1 estimate, a shifted LLᴴ otherwise), and the SZEP
-//! zero test that both share ([`szep`]).
+//! zero test that both share ([`szep`]); the equilibration and the shift ladder that the planar
+//! and the SE(3) sparse certificates share ([`ladder`]).
 //!
 //! May use: [`crate::problem`], [`crate::linalg`].
 
 pub mod dense;
+pub mod ladder;
 pub mod sparse;
 pub mod szep;
 

@@ -1,3 +1,4 @@
+use crate::certify::ladder::{Ladder, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -236,56 +237,22 @@ impl SparseCertifier {
     /// pivot is negative, by 4096 while 100 or more are (at most 8 factorizations).
     fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
-        let mut mu = self
+        let start = self
             .last_mu
             .map_or(1.0 / 16.0, |m| (64.0 * m).min(1.0 / 16.0));
-        // The last shift with more than one negative pivot, if any.
-        let mut above: Option<f64> = None;
-        for _ in 0..8 {
-            match self.inertia_at(lambda, scale, mu)? {
-                Some((negative, error)) if negative <= 1 => {
-                    let theta = mu - error - assembly;
-                    if theta > 0.0 {
-                        self.last_mu = Some(mu);
-                        return Some(Gap::new(negative, theta));
-                    }
-                    // The rounding hides the gap at μ; λ₂ may lie well above μ (the shifts step
-                    // by 64): bisect (in log scale, three times) towards the shift above.
-                    if let Some(mut hi) = above {
-                        for _ in 0..3 {
-                            let mid = (mu * hi).sqrt();
-                            match self.inertia_at(lambda, scale, mid)? {
-                                Some((negative, error)) if negative <= 1 => {
-                                    let theta = mid - error - assembly;
-                                    if theta > 0.0 {
-                                        self.last_mu = Some(mid);
-                                        return Some(Gap::new(negative, theta));
-                                    }
-                                    mu = mid;
-                                }
-                                _ => hi = mid,
-                            }
-                        }
-                    }
-                    // Double precision's rounding hides the gap: the same shift in double-double.
-                    return self.precise_gap(lambda, scale, mu, assembly);
-                }
-                other => {
-                    above = Some(mu);
-                    // The count of eigenvalues below μ falls like a power of μ (Weyl's law,
-                    // N(μ) ∝ μ^{d/2} on a d-dimensional graph): on the public files a factor 64
-                    // in μ divides it by 3 to 10, so from 100 negative pivots the ladder skips a
-                    // rung without passing λ₂ (one factorization fewer on every public file of
-                    // 800 poses or more).
-                    let many = matches!(other, Some((negative, _)) if negative >= 100);
-                    mu /= if many { 4096.0 } else { 64.0 };
-                }
+        match isolate(1, start, assembly, |mu| self.inertia_at(lambda, scale, mu)) {
+            Ladder::Found {
+                theta,
+                negative,
+                mu,
+            } => {
+                self.last_mu = Some(mu);
+                Some(Gap::new(negative, theta))
             }
-            if mu < 4.0 * assembly {
-                break;
-            }
+            // Double precision's rounding hides the gap: the same shift in double-double.
+            Ladder::Hidden { mu } => self.precise_gap(lambda, scale, mu, assembly),
+            Ladder::Failed => None,
         }
-        None
     }
 
     /// One LDLᴴ of D W̃(λ) D − μI in double precision: `Some((negative pivots, error))` with
@@ -432,8 +399,7 @@ impl SparseCertifier {
             if !(a[k] > 0.0 && a[k].is_finite()) {
                 return None;
             }
-            let e = (a[k].log2() / 2.0).floor();
-            scale[k] = 2f64.powi(-(e as i32));
+            scale[k] = power_of_two_scale(a[k]);
         }
         Some((a, scale))
     }

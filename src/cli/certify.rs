@@ -19,7 +19,7 @@ Examples:
 
 Exit status: 0 certified within --tol, 1 not certified (the bound printed still holds), 2 error.";
 
-/// Certify an estimate of a planar pose graph, or bound how far it is from optimal.
+/// Certify an estimate of a planar or 3D pose graph, or bound how far it is from optimal.
 ///
 /// The estimate's own Lagrange multipliers lambda (first-order conditions, eq. (33)) are tested:
 /// a proof that W(lambda) + eta*blkdiag(0, I) is positive semidefinite (the inertia of one sparse
@@ -39,6 +39,11 @@ Exit status: 0 certified within --tol, 1 not certified (the bound printed still 
 /// optimum of another objective, so pgo-certify reports it NOT certified, with a proven bound on
 /// how far its cost is above the optimum of f (intel: about 4% relative): that answer is right.
 /// The estimate pgo-solve writes without --refine is the one that can be certified.
+///
+/// 3D graphs: SE-Sync's objective and weights (see pgo-solve --help); the estimate's
+/// multipliers Lambda_i = sym((QX)_i X_i^T) and the proof that S + eta*P is positive
+/// semidefinite (LDL^T inertia and the Lehmann-Maehly bound for the estimate's three null
+/// directions, or a Cholesky factorization) give the bound sum tr(Lambda_i) - 3n*eta.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-certify", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -88,7 +93,11 @@ pub fn main() -> ExitCode {
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-certify")?;
     let progress = args.progress.start("pgo-certify");
-    let (graph, read_report) = args.input.read_shown(&progress)?;
+    let (graph, read_report) = args.input.read_any_shown(&progress)?;
+    let graph = match graph {
+        io::AnyGraph::Planar(graph) => graph,
+        io::AnyGraph::Spatial(graph) => return run3(args, &graph, &read_report, progress),
+    };
     let poses = match &args.estimate {
         None => {
             if !graph.vertices_declared
@@ -156,6 +165,80 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             .sum(),
     });
     rec.finish()?;
+    Ok(if report.certified {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+/// The rest of [`run`] for a 3D graph: the estimate (the file's own vertices or --estimate's,
+/// by id) certified by [`crate::solve::certify_estimate3`], reported as in 2D.
+fn run3(
+    args: &Args,
+    graph: &crate::graph3::Graph3,
+    read_report: &io::ReadReport,
+    progress: super::progress_bar::Progress,
+) -> crate::Result<ExitCode> {
+    let rerun = &args.rerun;
+    if rerun.rerun_save.is_some() || rerun.rerun_connect.is_some() || rerun.rerun_spawn {
+        return Err(Error::Invalid(
+            "--rerun-save, --rerun-connect, --rerun-spawn: 3D graphs are not recorded yet".into(),
+        ));
+    }
+    let poses = match &args.estimate {
+        None => graph.poses.clone(),
+        Some(path) => {
+            progress.phase(&format!("reading {path}"));
+            let options = ReadOptions {
+                ignore_equiv: true,
+                ..Default::default()
+            };
+            let (estimate, report) = io::read_any_path(path, &options)?;
+            progress.suspend(|| crate::cli::print_warnings(&report.warnings));
+            let io::AnyGraph::Spatial(estimate) = estimate else {
+                return Err(Error::Invalid(format!(
+                    "{path}: the estimate is a planar graph and the graph a 3D one"
+                )));
+            };
+            if estimate.form != graph.form {
+                return Err(Error::Invalid(format!(
+                    "{path}: the estimate writes its rotations in another form than the graph (g2o quaternions against TORO Euler angles)"
+                )));
+            }
+            graph
+                .ids
+                .iter()
+                .map(|&id| {
+                    estimate
+                        .index_of(id)
+                        .map(|k| estimate.poses[k])
+                        .ok_or_else(|| {
+                            Error::Invalid(format!(
+                                "{path}: the estimate has no vertex {id}, which the graph has"
+                            ))
+                        })
+                })
+                .collect::<crate::Result<Vec<_>>>()?
+        }
+    };
+    let options = CertifyOptions {
+        weights: args.weights.weights,
+        tolerance: args.tol,
+    };
+    let source = args.estimate.as_deref().unwrap_or(&args.input.input);
+    let report =
+        progress.watch(|| crate::solve::certify_estimate3(graph, &poses, &options, source))?;
+    progress.finish();
+    if args.json {
+        let json = JsonReport {
+            report: &report,
+            warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        };
+        write_stdout(to_json_line(&json)?.as_bytes())?;
+    } else {
+        eprint!("{}", text_report(args, &report));
+    }
     Ok(if report.certified {
         ExitCode::SUCCESS
     } else {

@@ -73,6 +73,16 @@ impl InputArgs {
     }
 }
 
+impl InputArgs {
+    /// Reads a planar or a 3D graph ([`io::read_any_path`]), printing the reader's warnings.
+    pub fn read_any_shown(&self, progress: &Progress) -> crate::Result<(io::AnyGraph, ReadReport)> {
+        progress.phase(&format!("reading {}", display_input(&self.input)));
+        let (graph, report) = io::read_any_path(&self.input, &self.read.options())?;
+        progress.suspend(|| crate::cli::print_warnings(&report.warnings));
+        Ok((graph, report))
+    }
+}
+
 /// An input path as messages show it (`<stdin>` for `-`).
 pub fn display_input(path: &str) -> &str {
     if path == "-" { "<stdin>" } else { path }

@@ -47,7 +47,7 @@ solved again: cost, bound and \"certified\" are of that inlier set's problem, no
 problem. The report lists every rejected edge (line, ids, r^2 at the final estimate). -o writes
 every edge as read, --drop-outliers only the inliers.";
 
-/// Solve a planar pose graph to global optimality and prove it.
+/// Solve a planar or 3D pose graph to global optimality and prove it.
 ///
 /// Small graphs (--method sdp) run the paper's Algorithm 1: the dual SDP (31), the single zero
 /// eigenvalue property (SZEP) of the penalized pose graph matrix W(lambda*), its scaled null
@@ -58,6 +58,14 @@ every edge as read, --drop-outliers only the inliers.";
 /// fails. The report gives the cost of the estimate, a proven lower bound on the optimum and
 /// their difference, which bounds the suboptimality; "certified" means that bound is within
 /// --tol. Each connected component is solved on its own.
+///
+/// 3D graphs (g2o VERTEX_SE3:QUAT/EDGE_SE3:QUAT, TORO VERTEX3/EDGE3) are SE-Sync's problem
+/// (Rosen et al. 2019): f = sum kappa*||R_j - R_i*R_ij||_F^2 + tau*||t_j - t_i - R_i*t_ij||^2,
+/// tau = 3/tr(inv(Omega_tt)), kappa = 3/(2*tr(inv(Omega_RR))), solved by the staircase on
+/// St(3, p)^n from rank 3 (--max-rank P: P - 1 lifts, up to rank P + 2) and certified by the
+/// inertia of one sparse LDL^T of S = Q - SymBlockDiag(Lambda) and the Lehmann-Maehly bound for
+/// its three null directions. --refine, --marginals, --robust and --method sdp do not apply to
+/// 3D graphs yet (exit status 2).
 #[derive(Debug, Parser)]
 #[command(name = "pgo-solve", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -340,8 +348,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-solve")?;
     let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
-    let (mut graph, mut read_report) = args.input.read_shown(&progress)?;
+    let (graph, mut read_report) = args.input.read_any_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
+    let mut graph = match graph {
+        io::AnyGraph::Planar(graph) => graph,
+        io::AnyGraph::Spatial(graph) => {
+            return run3(args, graph, read_report, read_s, output, progress);
+        }
+    };
     rec.graph(&graph);
     if args.marginals.is_some() && !graph.landmarks.is_empty() {
         return Err(Error::Invalid(
@@ -480,6 +494,206 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// The options of `pgo-solve` that do not apply to 3D graphs yet: an error naming the first one
+/// given.
+fn refuse3(args: &Args) -> crate::Result<()> {
+    let refused = [
+        (
+            args.refine,
+            "--refine (Levenberg-Marquardt under the full information)",
+        ),
+        (args.marginals.is_some(), "--marginals"),
+        (args.robust.is_some(), "--robust (graduated non-convexity)"),
+        (
+            args.method == Method::Sdp,
+            "--method sdp (the dual SDP of Algorithm 1 is planar)",
+        ),
+        (
+            args.rerun.rerun_save.is_some()
+                || args.rerun.rerun_connect.is_some()
+                || args.rerun.rerun_spawn,
+            "--rerun-save, --rerun-connect, --rerun-spawn (3D graphs are not recorded yet)",
+        ),
+    ];
+    match refused.iter().find(|(given, _)| *given) {
+        Some((_, what)) => Err(Error::Invalid(format!(
+            "{what}: not implemented for 3D graphs yet; 3D graphs are solved by the staircase (SE-Sync's problem) with --weights, --tol, --max-rank, --staircase-budget"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The report `--json` prints for a 3D graph: [`Report`]'s fields that apply.
+#[derive(Debug, Serialize)]
+pub struct Report3<'a> {
+    #[serde(flatten)]
+    pub solution: &'a crate::solve::Solution3,
+    pub written_estimate: &'static str,
+    pub written_chi2: Option<f64>,
+    pub written_certified: bool,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings: Option<Timings>,
+}
+
+/// The rest of [`run`] for a 3D graph: [`crate::solve::solve3`], the report, the estimate
+/// written in the graph's own form.
+fn run3(
+    args: &Args,
+    mut graph: crate::graph3::Graph3,
+    read_report: io::ReadReport,
+    read_s: f64,
+    output: Option<&str>,
+    progress: super::progress_bar::Progress,
+) -> crate::Result<ExitCode> {
+    refuse3(args)?;
+    let options = SolveOptions {
+        method: args.method,
+        solver: args.solver.unwrap_or(SdpSolver::Ipm),
+        weights: args.weights.weights,
+        tolerance: args.tol,
+        refine: false,
+        max_rank: args.max_rank as usize,
+        staircase_budget: args.staircase_budget * 1e9,
+    };
+    let t1 = Instant::now();
+    let solution = progress.watch(|| crate::solve::solve3(&graph, &options))?;
+    let solve_s = t1.elapsed().as_secs_f64();
+    graph.poses.clone_from(&solution.estimate);
+    let t2 = Instant::now();
+    let written = match output {
+        Some(path) => {
+            let format = args
+                .to
+                .or_else(|| Format::from_extension(path))
+                .unwrap_or(read_report.format);
+            progress.phase(&format!(
+                "writing {}",
+                if path == "-" { "<stdout>" } else { path }
+            ));
+            io::write3_path(&graph, format, path)
+        }
+        None => Ok(()),
+    };
+    let write_s = t2.elapsed().as_secs_f64();
+    progress.finish();
+    if args.solver.is_some() {
+        eprintln!(
+            "pgo-solve: warning: --solver had no effect: 3D graphs are solved by the staircase"
+        );
+    }
+    let report = Report3 {
+        solution: &solution,
+        written_estimate: "solved",
+        written_chi2: solution.chi2,
+        written_certified: solution.certified,
+        warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        timings: (!args.no_timings).then_some(Timings {
+            read_s,
+            solve_s,
+            write_s,
+            marginals_s: None,
+        }),
+    };
+    if args.json {
+        write_stdout(to_json_line(&report)?.as_bytes())?;
+    } else {
+        eprint!("{}", text_report3(&args.input.input, &report));
+    }
+    written?;
+    Ok(if args.fail_uncertified && !solution.certified {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn text_report3(input: &str, report: &Report3) -> String {
+    let r = report.solution;
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let mut out = format!(
+        "pgo-solve: {}: {} pose{}, {} edge{}, 3D, {} component{}; weights {}; method staircase (SE(3): Stiefel manifold, rank {})\n",
+        if input == "-" { "<stdin>" } else { input },
+        r.poses,
+        plural(r.poses),
+        r.edges,
+        plural(r.edges),
+        r.components.len(),
+        plural(r.components.len()),
+        r.weights.name(),
+        r.components
+            .iter()
+            .filter_map(|c| c.rank)
+            .max()
+            .unwrap_or(3),
+    );
+    let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
+    out += &row("cost", num(r.cost));
+    out += &row(
+        "chi2 (g2o)",
+        r.chi2
+            .map_or("undefined (TORO information over Euler angles)".into(), num),
+    );
+    out += &row("lower bound", num(r.lower_bound));
+    out += &row(
+        "suboptimality <=",
+        format!(
+            "{} ({} relative)",
+            num(r.suboptimality_bound),
+            num(r.relative_suboptimality_bound)
+        ),
+    );
+    out += &row(
+        "exact relaxation",
+        if r.szep {
+            "yes (S has exactly 3 eigenvalues at zero, the rest proven positive)".to_string()
+        } else {
+            "not shown".to_string()
+        },
+    );
+    for (k, c) in r.components.iter().enumerate() {
+        if r.components.len() > 1 {
+            out += &row(
+                &format!("component {}", k + 1),
+                format!(
+                    "{} poses from id {}: cost {}, bound {}, {}",
+                    c.poses,
+                    c.first_id,
+                    num(c.cost),
+                    num(c.lower_bound),
+                    if c.certified {
+                        "certified"
+                    } else {
+                        "not certified"
+                    }
+                ),
+            );
+        }
+    }
+    out += &row(
+        "result",
+        if r.certified {
+            "certified optimal within the bound above".to_string()
+        } else {
+            "NOT certified within --tol; the bound above still holds".to_string()
+        },
+    );
+    if let Some(why) = &r.not_certified_because {
+        out += &row("why not certified", why.clone());
+    }
+    if let Some(t) = &report.timings {
+        out += &row(
+            "time",
+            format!(
+                "read {:.3} s, solve {:.3} s, write {:.3} s",
+                t.read_s, t.solve_s, t.write_s
+            ),
+        );
+    }
+    out
 }
 
 fn solver_name(solver: SdpSolver) -> &'static str {

@@ -4,13 +4,15 @@
 //! full information matrices), and [`certify_estimate`] for any estimate. The graph's spectrum is
 //! [`crate::spectrum::spectrum`].
 //!
-//! May use: every room below it ([`crate::staircase`], [`crate::dual`], [`crate::certify`],
+//! May use: every room below it ([`crate::staircase`], [`crate::se3`], [`crate::dual`], [`crate::certify`],
 //! [`crate::refine`], [`crate::problem`], [`crate::progress`]); nothing of `viz` or `cli`.
 
 mod best;
 mod estimate;
+mod spatial;
 
 pub use estimate::{CertifyOptions, EstimateComponent, EstimateReport, certify_estimate};
+pub use spatial::{Solution3, certify_estimate3, chi2_3, solve3};
 
 use crate::dual::algorithm1::{self, ComponentSolution, check_dense_size};
 use crate::dual::rounding::Rounding;

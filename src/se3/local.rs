@@ -1,0 +1,486 @@
+//! Local optimization at rank p: Riemannian Newton on St(3, p)^n × ℝ^{p(n−1)}, damped
+//! Levenberg-Marquardt style (the trust region of SE-Sync's Algorithm 2 as a damping μ, updated
+//! by Nielsen's rule from the ratio of actual to predicted decrease), as the planar
+//! [`crate::staircase`] does it: the exact Riemannian Hessian 2 Bᵀ (S ⊗ I_p) B in an orthonormal
+//! tangent basis B ([`super::stiefel`]), one symbolic sparse Cholesky per rank reused by every
+//! step, and variable projection: every trial point takes the translations optimal for its
+//! rotations (t = −L⁻¹ V Y, one solve with a Cholesky factor of the anchored τ-Laplacian L).
+//!
+//! The gauge: the anchor's translation is 0 and its rotation rows are held where they are (the
+//! cost is invariant under X → X Gᵀ, G ∈ O(p), so nothing is lost), which leaves the Hessian
+//! nonsingular at a nondegenerate minimum of rank 3.
+
+use super::problem::{Point3, Problem3};
+use super::stiefel::{polar_rows, tangent_basis};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
+
+/// One step, for progress reports.
+#[derive(Debug, Clone, Copy)]
+pub struct Step3 {
+    pub rank: usize,
+    pub iteration: usize,
+    pub cost: f64,
+    pub gradient_norm: f64,
+    pub damping: f64,
+}
+
+/// The result of [`optimize`].
+#[derive(Debug, Clone)]
+pub struct Local3 {
+    pub point: Point3,
+    pub cost: f64,
+    pub gradient_norm: f64,
+    pub iterations: usize,
+    pub converged: bool,
+    /// Real multiply-adds of the Newton factorizations.
+    pub work: f64,
+}
+
+/// QX by Q's blocks (no rounding bounds; for the solver's own use).
+pub fn apply_q(problem: &Problem3, x: &Point3) -> Vec<f64> {
+    let p = x.p;
+    let mut out = vec![0.0; problem.dim() * p];
+    for (k, &(u, v)) in problem.pairs.iter().enumerate() {
+        let b = &problem.blocks[k];
+        for la in 0..4 {
+            let Some(ra) = problem.local_row(u, la) else {
+                continue;
+            };
+            for lb in 0..4 {
+                let Some(rb) = problem.local_row(v, lb) else {
+                    continue;
+                };
+                let q = b[la][lb];
+                if q == 0.0 {
+                    continue;
+                }
+                for c in 0..p {
+                    out[ra * p + c] += q * x.x[rb * p + c];
+                }
+                if u != v {
+                    for c in 0..p {
+                        out[rb * p + c] += q * x.x[ra * p + c];
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The Cholesky factor of the anchored τ-Laplacian, for the optimal translations.
+pub struct Translations {
+    factor: Option<SparseFactor<f64>>,
+}
+
+impl Translations {
+    pub fn new(problem: &Problem3) -> Self {
+        let m = problem.n - 1;
+        if m == 0 {
+            return Translations { factor: None };
+        }
+        let entries = problem.laplacian();
+        let pattern: Vec<(usize, usize)> = entries.iter().map(|&(r, c, _)| (r, c)).collect();
+        let mut assembly = Assembly::<f64>::new(m, &pattern);
+        let values: Vec<f64> = entries.iter().map(|e| e.2).collect();
+        assembly.fill(&values);
+        let mut factor = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
+        let ok = factor.llt(assembly.matrix.as_ref()).is_ok();
+        Translations {
+            factor: ok.then_some(factor),
+        }
+    }
+
+    /// Sets the translations of `x` optimal for its rotations.
+    pub fn project(&mut self, problem: &Problem3, x: &mut Point3) {
+        let Some(factor) = self.factor.as_mut() else {
+            return;
+        };
+        let (m, p) = (problem.n - 1, x.p);
+        x.x[..m * p].fill(0.0);
+        let qx = apply_q(problem, x);
+        // Column-major right-hand sides −(V Y).
+        let mut rhs = vec![0.0; m * p];
+        for r in 0..m {
+            for c in 0..p {
+                rhs[c * m + r] = -qx[r * p + c];
+            }
+        }
+        factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, p));
+        for r in 0..m {
+            for c in 0..p {
+                x.x[r * p + c] = rhs[c * m + r];
+            }
+        }
+    }
+}
+
+/// The Newton system's layout at rank p: coordinates pose by pose (p translation coordinates
+/// unless the anchor, then 3p − 6 rotation ones unless the anchor), its pattern analyzed once.
+struct System {
+    p: usize,
+    offset: Vec<usize>,
+    dims: Vec<usize>,
+    assembly: Assembly<f64>,
+    factor: SparseFactor<f64>,
+    /// Index of the first value of each pair's block in the value list.
+    diagonal: Vec<usize>,
+    count: usize,
+    /// The elimination order (`order[new] = old` coordinate) and room for a permuted vector.
+    order: Vec<usize>,
+    permuted: Vec<f64>,
+}
+
+impl System {
+    fn new(problem: &Problem3, p: usize) -> Self {
+        let n = problem.n;
+        let dims: Vec<usize> = (0..n)
+            .map(|u| {
+                if u == problem.anchor {
+                    0
+                } else {
+                    p + 3 * p - 6
+                }
+            })
+            .collect();
+        let mut offset = vec![0; n + 1];
+        for u in 0..n {
+            offset[u + 1] = offset[u] + dims[u];
+        }
+        let dim = offset[n];
+        let mut pattern = Vec::new();
+        let mut diagonal = vec![usize::MAX; dim];
+        for &(u, v) in &problem.pairs {
+            for a in 0..dims[u] {
+                for b in 0..dims[v] {
+                    if u == v && b < a {
+                        continue;
+                    }
+                    let (r, c) = (offset[u] + a, offset[v] + b);
+                    if r == c {
+                        diagonal[r] = pattern.len();
+                    }
+                    pattern.push((r.min(c), r.max(c)));
+                }
+            }
+        }
+        let count = pattern.len();
+        let mut group = vec![0; dim];
+        for u in 0..n {
+            for k in offset[u]..offset[u + 1] {
+                group[k] = u;
+            }
+        }
+        let order = group_ordering(&problem.pose_rank, &group);
+        // As the planar Newton system: supernodal, assembled directly in its elimination order
+        // and triangle (faer then factors it without a permuted copy).
+        let layout = Layout::Supernodal;
+        let assembly = Assembly::permuted(dim, &pattern, &order, layout.stored_side());
+        let factor = SparseFactor::analyze_in_order(
+            assembly.matrix.symbolic(),
+            layout.stored_side(),
+            layout,
+        );
+        System {
+            p,
+            offset,
+            dims,
+            assembly,
+            factor,
+            diagonal,
+            count,
+            permuted: vec![0.0; order.len()],
+            order,
+        }
+    }
+
+    /// Solves the last factorization's system in place (coordinates in the pose order).
+    fn solve_in_place(&mut self, b: &mut [f64]) {
+        for (p, &old) in self.permuted.iter_mut().zip(&self.order) {
+            *p = b[old];
+        }
+        self.factor.solve_in_place(&mut self.permuted);
+        for (p, &old) in self.permuted.iter().zip(&self.order) {
+            b[old] = *p;
+        }
+    }
+
+    fn dim(&self) -> usize {
+        *self.offset.last().unwrap()
+    }
+}
+
+/// The dense basis of one pose's coordinates over its 4p entries (translation row, then the
+/// three rotation rows): column-major, 4p × dims[u].
+fn pose_basis(problem: &Problem3, x: &Point3, u: usize, p: usize) -> Vec<f64> {
+    if u == problem.anchor {
+        return Vec::new();
+    }
+    let d = 4 * p - 6;
+    let mut b = vec![0.0; 4 * p * d];
+    for c in 0..p {
+        b[c * 4 * p + c] = 1.0;
+    }
+    let r0 = problem.rotation_row(u, 0);
+    let tb = tangent_basis(&x.x[r0 * p..(r0 + 3) * p], p);
+    for k in 0..3 * p - 6 {
+        let col = p + k;
+        b[col * 4 * p + p..(col + 1) * 4 * p].copy_from_slice(&tb[k * 3 * p..(k + 1) * 3 * p]);
+    }
+    b
+}
+
+/// The multipliers Λ_i (3x3) at x from QX.
+fn lambda_blocks(problem: &Problem3, x: &Point3, qx: &[f64]) -> Vec<[[f64; 3]; 3]> {
+    problem.multipliers(x, qx)
+}
+
+/// Hessian values (pattern order) and gradient coordinates at x.
+fn hessian(
+    problem: &Problem3,
+    sys: &System,
+    x: &Point3,
+    qx: &[f64],
+    bases: &[Vec<f64>],
+) -> (Vec<f64>, Vec<f64>) {
+    let p = sys.p;
+    let lambda = lambda_blocks(problem, x, qx);
+    let mut values = Vec::with_capacity(sys.count);
+    let mut kb: Vec<f64> = Vec::new();
+    for (k, &(u, v)) in problem.pairs.iter().enumerate() {
+        let (du, dv) = (sys.dims[u], sys.dims[v]);
+        if du == 0 || dv == 0 {
+            continue;
+        }
+        // S_uv (4x4) ⊗ I_p.
+        let mut s = problem.blocks[k];
+        if u == v {
+            for a in 0..3 {
+                for b in 0..3 {
+                    s[1 + a][1 + b] -= lambda[u][a][b];
+                }
+            }
+        }
+        let (bu, bv) = (&bases[u], &bases[v]);
+        // (S_uv ⊗ I_p) B_v (4p × dv), row (la, c) = Σ_lb S[la][lb] B_v[(lb, c)].
+        kb.clear();
+        kb.resize(4 * p * dv, 0.0);
+        for b in 0..dv {
+            let col = &bv[b * 4 * p..(b + 1) * 4 * p];
+            let out = &mut kb[b * 4 * p..(b + 1) * 4 * p];
+            for la in 0..4 {
+                for lb in 0..4 {
+                    let q = s[la][lb];
+                    if q != 0.0 {
+                        for c in 0..p {
+                            out[la * p + c] += q * col[lb * p + c];
+                        }
+                    }
+                }
+            }
+        }
+        for a in 0..du {
+            let ua = &bu[a * 4 * p..(a + 1) * 4 * p];
+            for b in 0..dv {
+                if u == v && b < a {
+                    continue;
+                }
+                let kbb = &kb[b * 4 * p..(b + 1) * 4 * p];
+                values.push(2.0 * ua.iter().zip(kbb).map(|(a, c)| a * c).sum::<f64>());
+            }
+        }
+    }
+    // Gradient: Bᵀ 2QX (the normal part ΛX is orthogonal to B).
+    let mut grad = vec![0.0; sys.dim()];
+    let mut local = vec![0.0; 4 * p];
+    for u in 0..problem.n {
+        if sys.dims[u] == 0 {
+            continue;
+        }
+        for l in 0..4 {
+            let r = problem.local_row(u, l).expect("not the anchor");
+            local[l * p..(l + 1) * p].copy_from_slice(&qx[r * p..(r + 1) * p]);
+        }
+        for a in 0..sys.dims[u] {
+            let col = &bases[u][a * 4 * p..(a + 1) * 4 * p];
+            grad[sys.offset[u] + a] = 2.0 * col.iter().zip(&local).map(|(x, y)| x * y).sum::<f64>();
+        }
+    }
+    (values, grad)
+}
+
+/// Options of [`optimize`].
+#[derive(Debug, Clone, Copy)]
+pub struct LocalOptions {
+    pub max_iterations: usize,
+}
+
+/// Riemannian Newton (damped) from `x` at its rank, translations projected first.
+pub fn optimize(
+    problem: &Problem3,
+    translations: &mut Translations,
+    mut x: Point3,
+    options: &LocalOptions,
+    report: &mut dyn FnMut(Step3),
+) -> Local3 {
+    let p = x.p;
+    translations.project(problem, &mut x);
+    let mut sys = System::new(problem, p);
+    let total_weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
+    let mut cost = problem.cost(&x);
+    let mut mu = 1e-6;
+    let mut nu = 2.0;
+    let mut work = 0.0;
+    let mut gradient_norm = f64::INFINITY;
+    let mut converged = false;
+    let mut iterations = 0;
+    let dim = sys.dim();
+    if dim == 0 {
+        return Local3 {
+            point: x,
+            cost,
+            gradient_norm: 0.0,
+            iterations: 0,
+            converged: true,
+            work,
+        };
+    }
+    let mut fresh = true;
+    let (mut values, mut grad, mut bases) = (Vec::new(), Vec::new(), Vec::new());
+    while iterations < options.max_iterations {
+        if fresh {
+            let qx = apply_q(problem, &x);
+            bases = (0..problem.n)
+                .map(|u| pose_basis(problem, &x, u, p))
+                .collect();
+            (values, grad) = hessian(problem, &sys, &x, &qx, &bases);
+            gradient_norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+            fresh = false;
+        }
+        if gradient_norm == 0.0 {
+            converged = true;
+            break;
+        }
+        // (H + μ D) δ = −g, D = max(|diag H|, floor).
+        let dmax = sys
+            .diagonal
+            .iter()
+            .fold(0.0f64, |m, &k| m.max(values[k].abs()));
+        let mut damped = values.clone();
+        for &k in &sys.diagonal {
+            damped[k] += mu * values[k].abs().max(1e-12 * dmax);
+        }
+        sys.assembly.fill(&damped);
+        work += sys.factor.multiply_adds();
+        if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
+            mu = (mu * nu).max(1e-8);
+            nu *= 2.0;
+            iterations += 1;
+            continue;
+        }
+        let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
+        sys.solve_in_place(&mut delta);
+        // Predicted decrease −(gᵀδ + ½ δᵀHδ), H applied through the stored upper triangle.
+        let mut hd = vec![0.0; dim];
+        let mut k = 0;
+        for &(u, v) in &problem.pairs {
+            let (du, dv) = (sys.dims[u], sys.dims[v]);
+            if du == 0 || dv == 0 {
+                continue;
+            }
+            for a in 0..du {
+                for b in 0..dv {
+                    if u == v && b < a {
+                        continue;
+                    }
+                    let (r, c) = (sys.offset[u] + a, sys.offset[v] + b);
+                    let h = values[k];
+                    k += 1;
+                    hd[r] += h * delta[c];
+                    if r != c {
+                        hd[c] += h * delta[r];
+                    }
+                }
+            }
+        }
+        let gd: f64 = grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
+        let dhd: f64 = hd.iter().zip(&delta).map(|(a, b)| a * b).sum();
+        let predicted = -(gd + 0.5 * dhd);
+        // Trial point.
+        let mut trial = x.clone();
+        for u in 0..problem.n {
+            if sys.dims[u] == 0 {
+                continue;
+            }
+            let d = &delta[sys.offset[u]..sys.offset[u + 1]];
+            let mut v = vec![0.0; 4 * p];
+            for (a, &da) in d.iter().enumerate() {
+                for (vk, bk) in v.iter_mut().zip(&bases[u][a * 4 * p..(a + 1) * 4 * p]) {
+                    *vk += da * bk;
+                }
+            }
+            for l in 0..4 {
+                let r = problem.local_row(u, l).expect("not the anchor");
+                for c in 0..p {
+                    trial.x[r * p + c] += v[l * p + c];
+                }
+            }
+            let r0 = problem.rotation_row(u, 0);
+            polar_rows(&mut trial.x[r0 * p..(r0 + 3) * p], p);
+        }
+        translations.project(problem, &mut trial);
+        let trial_cost = problem.cost(&trial);
+        iterations += 1;
+        let actual = cost - trial_cost;
+        let rho = if predicted > 0.0 {
+            actual / predicted
+        } else {
+            -1.0
+        };
+        report(Step3 {
+            rank: p,
+            iteration: iterations,
+            cost: trial_cost.min(cost),
+            gradient_norm,
+            damping: mu,
+        });
+        let negligible = predicted <= 1e-12 * cost + 1e-24 * total_weight;
+        if negligible && (actual.is_nan() || actual <= 0.0) {
+            // Converged: no step predicts a decrease above the rounding of f.
+            converged = true;
+            break;
+        }
+        if rho > 1e-4 || (actual >= 0.0 && negligible) {
+            x = trial;
+            cost = trial_cost;
+            fresh = true;
+            mu *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+            nu = 2.0;
+            if negligible {
+                // One more gradient evaluation for the report.
+                let qx = apply_q(problem, &x);
+                bases = (0..problem.n)
+                    .map(|u| pose_basis(problem, &x, u, p))
+                    .collect();
+                let (_, g) = hessian(problem, &sys, &x, &qx, &bases);
+                gradient_norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
+                converged = true;
+                break;
+            }
+        } else {
+            mu = (mu * nu).max(1e-10);
+            nu *= 2.0;
+            if mu > 1e20 {
+                break;
+            }
+        }
+    }
+    Local3 {
+        point: x,
+        cost,
+        gradient_norm,
+        iterations,
+        converged,
+        work,
+    }
+}

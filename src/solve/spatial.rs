@@ -1,0 +1,369 @@
+//! The whole jobs on 3D graphs (issue 15): [`solve3`] beside [`super::solve`] and
+//! [`certify_estimate3`] beside [`super::certify_estimate`], component by component, with the
+//! planar reports' field names (cost, lower_bound, suboptimality_bound, certified, rank, ...).
+//! The method is [`crate::se3`] (SE-Sync's problem and staircase with pgo's certificate); the
+//! objective is SE-Sync's f with its weights, the same convention as the planar cost (factor 1
+//! to SE-Sync's reported optima).
+
+use super::estimate::{CertifyOptions, EstimateComponent, EstimateReport};
+use super::{ComponentReport, Method, SolveOptions, within};
+use crate::error::Error;
+use crate::graph3::{Form3, Graph3, Pose3, Rotation3};
+use crate::problem::weights::Weights;
+use crate::se3::local::Step3;
+use crate::se3::problem::weights3;
+use crate::se3::rounding::Rt;
+use crate::se3::{Options3, certify_estimate3 as certify_component, rt_of, solve_graph3};
+use nalgebra::{Isometry3, Matrix3, Rotation3 as NRotation3, Translation3, UnitQuaternion};
+use serde::Serialize;
+
+/// The solved 3D graph: the estimate and, per component and summed, its cost, the proven lower
+/// bound on f* and their difference (the fields of the planar [`super::Solution`] that apply).
+#[derive(Debug, Serialize)]
+pub struct Solution3 {
+    /// 3.
+    pub dimension: u8,
+    pub method: Method,
+    pub weights: Weights,
+    pub poses: usize,
+    pub edges: usize,
+    /// f at the estimate (SE-Sync's objective with its weights).
+    pub cost: f64,
+    /// g2o's chi2 of the estimate (EDGE_SE3:QUAT's error: translation and quaternion vector
+    /// part of z⁻¹·x_i⁻¹·x_j, w ≥ 0); `None` for TORO files.
+    pub chi2: Option<f64>,
+    pub lower_bound: f64,
+    pub suboptimality_bound: f64,
+    pub relative_suboptimality_bound: f64,
+    pub certified: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_certified_because: Option<String>,
+    /// Every component's certificate matrix S proven to have exactly 3 eigenvalues at zero
+    /// (the kernel of the rank-3 estimate: the relaxation is exact, SE-Sync's Theorem 7) and
+    /// the rest positive: the 3D counterpart of the planar single zero eigenvalue property.
+    pub szep: bool,
+    pub near_zero_eigenvalues: usize,
+    pub components: Vec<ComponentReport>,
+    /// One pose per pose of the graph, in its order and form, in the input's gauge (each
+    /// component's FIX pose, else its first pose, exactly where the input has it).
+    #[serde(skip)]
+    pub estimate: Vec<Pose3>,
+}
+
+/// A connected component of a 3D graph as a graph of its own, and its poses' indices in the
+/// whole graph (ascending).
+fn components(graph: &Graph3) -> Vec<(Graph3, Vec<usize>)> {
+    let (label, count) = graph.connected_components();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); count];
+    let mut local = vec![0; graph.num_poses()];
+    for (k, &l) in label.iter().enumerate() {
+        local[k] = members[l].len();
+        members[l].push(k);
+    }
+    members
+        .into_iter()
+        .enumerate()
+        .map(|(c, m)| {
+            let part = Graph3 {
+                ids: m.iter().map(|&k| graph.ids[k]).collect(),
+                poses: m.iter().map(|&k| graph.poses[k]).collect(),
+                edges: graph
+                    .edges
+                    .iter()
+                    .filter(|e| label[e.i] == c)
+                    .map(|e| {
+                        let mut e = *e;
+                        e.i = local[e.i];
+                        e.j = local[e.j];
+                        e
+                    })
+                    .collect(),
+                fixed: graph
+                    .fixed
+                    .iter()
+                    .filter(|&&k| label[k] == c)
+                    .map(|&k| local[k])
+                    .collect(),
+                form: graph.form,
+            };
+            (part, m)
+        })
+        .collect()
+}
+
+fn check(graph: &Graph3, parts: &[(Graph3, Vec<usize>)]) -> crate::Result<()> {
+    if graph.num_poses() == 0 {
+        return Err(Error::Invalid("the graph has no poses".into()));
+    }
+    if let Some(e) = graph.edges.iter().find(|e| e.i == e.j) {
+        return Err(Error::Invalid(format!(
+            "edge {} -> {} joins a pose to itself: 3D graphs with such edges are not solved",
+            graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
+    if let Some((part, _)) = parts.iter().find(|(p, _)| p.fixed.len() > 1) {
+        let mut ids: Vec<u32> = part.fixed.iter().map(|&k| part.ids[k]).collect();
+        ids.sort_unstable();
+        let list: Vec<String> = ids.iter().map(u32::to_string).collect();
+        return Err(Error::Invalid(format!(
+            "FIX lines name vertices {}, which are in one connected component: several fixed \
+             poses in one component are known poses, a constrained problem that pgo does not \
+             solve or certify (one FIX per component only sets the gauge); keep at most one \
+             FIX line per component",
+            list.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+fn isometry(p: &Rt) -> Isometry3<f64> {
+    let m = Matrix3::from_row_slice(&p.r);
+    let q = UnitQuaternion::from_rotation_matrix(&NRotation3::from_matrix_unchecked(m));
+    Isometry3::from_parts(Translation3::new(p.t[0], p.t[1], p.t[2]), q)
+}
+
+/// A pose in the graph's form (quaternion `[x, y, z, w]` with w ≥ 0, or TORO's Euler angles).
+fn pose_in(form: Form3, m: &Isometry3<f64>) -> Pose3 {
+    let t = m.translation.vector;
+    let rotation = match form {
+        Form3::G2o => {
+            let q = m.rotation.quaternion();
+            let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+            Rotation3::Quaternion([s * q.i, s * q.j, s * q.k, s * q.w])
+        }
+        Form3::Toro => {
+            let (roll, pitch, yaw) = m.rotation.euler_angles();
+            Rotation3::Euler([roll, pitch, yaw])
+        }
+    };
+    Pose3 {
+        translation: [t.x, t.y, t.z],
+        rotation,
+    }
+}
+
+/// g2o's chi2 of poses under the full information matrices (g2o files; `None` for TORO's,
+/// whose information is over Euler angles, or where not finite).
+pub fn chi2_3(graph: &Graph3, poses: &[Pose3]) -> Option<f64> {
+    if graph.form != Form3::G2o {
+        return None;
+    }
+    let x: Vec<Isometry3<f64>> = poses.iter().map(|p| p.to_isometry()).collect();
+    let mut total = 0.0;
+    for e in &graph.edges {
+        let d = e.measurement.to_isometry().inverse() * (x[e.i].inverse() * x[e.j]);
+        let q = d.rotation.quaternion();
+        let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+        let t = d.translation.vector;
+        let v = [t.x, t.y, t.z, s * q.i, s * q.j, s * q.k];
+        for a in 0..6 {
+            for b in 0..6 {
+                total += v[a] * e.information.get(a, b) * v[b];
+            }
+        }
+    }
+    total.is_finite().then_some(total)
+}
+
+/// Solves every connected component of a 3D graph to a certified optimum where SE-Sync's
+/// relaxation is exact, and bounds the suboptimality where it is not. Newton steps are
+/// reported through [`crate::progress`].
+///
+/// # Errors
+///
+/// Options that do not apply to 3D graphs yet (`refine`, `method` sdp), an information matrix
+/// without isotropic weights, several FIX poses in one component, a self-loop.
+pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3> {
+    if options.refine {
+        return Err(Error::Invalid(
+            "--refine: refinement under the full information matrices is not implemented for 3D graphs yet".into(),
+        ));
+    }
+    if options.method == Method::Sdp {
+        return Err(Error::Invalid(
+            "--method sdp: Algorithm 1 (the dual SDP) is planar; 3D graphs are solved by the staircase (--method auto or staircase)".into(),
+        ));
+    }
+    let parts = components(graph);
+    check(graph, &parts)?;
+    let unit = options.weights == Weights::Unit;
+    let staircase = Options3 {
+        tolerance: options.tolerance,
+        // Rank 3 is the problem itself (rank 1 in 2D): the same number of lifts.
+        max_rank: options.max_rank + 2,
+        budget: options.staircase_budget,
+        ..Default::default()
+    };
+    let mut estimate = graph.poses.clone();
+    let mut reports = Vec::new();
+    let mut step = 0u64;
+    for (part, members) in &parts {
+        let weights = weights3(part, unit)?;
+        let s = solve_graph3(part, &weights, &staircase, &mut |it: Step3| {
+            step += 1;
+            crate::progress::iteration(
+                step,
+                &[
+                    ("cost", it.cost),
+                    ("gradient_norm", it.gradient_norm),
+                    ("rank", it.rank as f64),
+                    ("damping", it.damping),
+                ],
+            );
+        });
+        // The gauge: the FIX pose (else the first) where the input has it.
+        let g = part.fixed.first().copied().unwrap_or(0);
+        let to_input = part.poses[g].to_isometry() * isometry(&s.poses[g]).inverse();
+        for (k, (pose, &at)) in s.poses.iter().zip(members).enumerate() {
+            estimate[at] = if k == g {
+                part.poses[g]
+            } else {
+                pose_in(graph.form, &(to_input * isometry(pose)))
+            };
+        }
+        let proven = s.bound.is_some() || s.lower_bound > 0.0;
+        let deflated = s.bound.and_then(|b| b.deflated);
+        let suboptimality_bound = s.cost - s.lower_bound;
+        let part_estimate: Vec<Pose3> = members.iter().map(|&k| estimate[k]).collect();
+        reports.push(ComponentReport {
+            first_id: part.ids[0],
+            poses: part.num_poses(),
+            edges: part.edges.len(),
+            landmarks: 0,
+            observations: 0,
+            cost: s.cost,
+            lower_bound: s.lower_bound,
+            suboptimality_bound,
+            certified: s.certified && proven,
+            szep: deflated == Some(3),
+            near_zero_eigenvalues: deflated.unwrap_or(0),
+            method: Method::Staircase,
+            rounding: None,
+            penalized_eigenvalues: None,
+            sdp_iterations: None,
+            sdp_converged: None,
+            rank: Some(s.rank),
+            iterations: Some(s.iterations),
+            eta: s.bound.map(|b| b.eta),
+            gradient_norm: Some(s.gradient_norm),
+            certified_chi2: chi2_3(part, &part_estimate),
+            refined_chi2: None,
+            refine_iterations: None,
+            not_certified_because: s.not_certified_because.clone(),
+        });
+    }
+    let cost = reports.iter().fold(0.0, |a, c| a + c.cost);
+    let lower_bound = reports.iter().fold(0.0, |a, c| a + c.lower_bound);
+    let suboptimality_bound = cost - lower_bound;
+    let certified = reports.iter().all(|c| c.certified);
+    let several = reports.len() > 1;
+    let why: Vec<String> = reports
+        .iter()
+        .filter_map(|c| {
+            let w = c.not_certified_because.as_ref()?;
+            Some(if several {
+                format!("component at id {}: {w}", c.first_id)
+            } else {
+                w.clone()
+            })
+        })
+        .collect();
+    Ok(Solution3 {
+        dimension: 3,
+        method: options.method,
+        weights: options.weights,
+        poses: graph.num_poses(),
+        edges: graph.edges.len(),
+        cost,
+        chi2: chi2_3(graph, &estimate),
+        lower_bound,
+        suboptimality_bound,
+        relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
+        certified,
+        not_certified_because: (!certified && !why.is_empty()).then(|| why.join("; ")),
+        szep: reports.iter().all(|c| c.szep),
+        near_zero_eigenvalues: reports.iter().map(|c| c.near_zero_eigenvalues).sum(),
+        components: reports,
+        estimate,
+    })
+}
+
+/// Bounds the suboptimality of a 3D `estimate` (one pose per pose of `graph`, in its order):
+/// the estimate's own multipliers and the certificate of [`crate::se3::certificate`]; where
+/// they do not certify it within the tolerance, the proven bound of the optimum (the solver),
+/// whichever is higher. The report is the planar one ([`EstimateReport`]).
+pub fn certify_estimate3(
+    graph: &Graph3,
+    estimate: &[Pose3],
+    options: &CertifyOptions,
+    source: &str,
+) -> crate::Result<EstimateReport> {
+    let parts = components(graph);
+    check(graph, &parts)?;
+    let unit = options.weights == Weights::Unit;
+    let tol = options.tolerance;
+    let mut comps = Vec::new();
+    for (part, members) in &parts {
+        let weights = weights3(part, unit)?;
+        let poses: Vec<Rt> = members.iter().map(|&k| rt_of(&estimate[k])).collect();
+        let own = certify_component(part, &weights, &poses, tol);
+        if !own.cost.is_finite() {
+            return Err(Error::Invalid(format!(
+                "{source}: the cost of the estimate overflows a 64-bit float (its poses are too far apart for the weights)"
+            )));
+        }
+        let own_bound = own.bound.map(|b| b.lower_bound.max(0.0));
+        let (lower_bound, bound_from) = match own_bound {
+            Some(lb) if within(own.cost - lb, own.cost, tol) => (lb, "estimate"),
+            _ => {
+                let options = Options3 {
+                    tolerance: tol,
+                    ..Default::default()
+                };
+                let solved = solve_graph3(part, &weights, &options, &mut |_| {}).lower_bound;
+                match own_bound {
+                    Some(lb) if lb >= solved => (lb, "estimate"),
+                    _ => (solved, "solution"),
+                }
+            }
+        };
+        let suboptimality_bound = own.cost - lower_bound;
+        comps.push(EstimateComponent {
+            first_id: part.ids[0],
+            poses: part.num_poses(),
+            edges: part.edges.len(),
+            cost: own.cost,
+            lower_bound,
+            suboptimality_bound,
+            certified: within(suboptimality_bound, own.cost, tol),
+            bound_from,
+            eta: own
+                .bound
+                .filter(|_| bound_from == "estimate")
+                .map(|b| b.eta),
+            gradient_norm: own.gradient_norm,
+            near_zero_eigenvalues: own.bound.and_then(|b| b.deflated),
+        });
+    }
+    let cost = comps.iter().fold(0.0, |a, c| a + c.cost);
+    let lower_bound = comps.iter().fold(0.0, |a, c| a + c.lower_bound);
+    let suboptimality_bound = cost - lower_bound;
+    let gradient_norm = comps
+        .iter()
+        .map(|c| c.gradient_norm * c.gradient_norm)
+        .sum::<f64>()
+        .sqrt();
+    Ok(EstimateReport {
+        weights: options.weights,
+        poses: graph.num_poses(),
+        edges: graph.edges.len(),
+        cost,
+        chi2: chi2_3(graph, estimate),
+        lower_bound,
+        suboptimality_bound,
+        relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
+        certified: comps.iter().all(|c| c.certified),
+        gradient_norm,
+        components: comps,
+    })
+}
