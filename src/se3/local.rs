@@ -330,6 +330,11 @@ pub fn optimize(
     let mut cost = problem.cost(&x);
     let mut mu = 1e-6;
     let mut nu = 2.0;
+    // Nielsen's rule μ·max(1 − (2ρ − 1)³, c), with c = 1/100 at rank 3 (the planar staircase's
+    // choice at rank 1, for the same reason: the damping slows Newton along the graph's soft
+    // directions, and at the lowest rank the gauge-fixed minimum is nondegenerate); his 1/3
+    // above, where minima are degenerate along the rank-deficient directions.
+    let fastest_decrease: f64 = if p == 3 { 1e-2 } else { 1.0 / 3.0 };
     let mut work = 0.0;
     let mut gradient_norm = f64::INFINITY;
     let mut converged = false;
@@ -454,7 +459,7 @@ pub fn optimize(
             x = trial;
             cost = trial_cost;
             fresh = true;
-            mu *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+            mu *= fastest_decrease.max(1.0 - (2.0 * rho - 1.0).powi(3));
             nu = 2.0;
             if negligible {
                 // One more gradient evaluation for the report.
