@@ -263,6 +263,30 @@ fn stats_count_landmarks() {
     }
 }
 
+/// pgo-spectrum names the landmarks, and its W has one row per unknown position and rotation of
+/// the anchored problem (eq. (24) with the landmark rows): (n − 1) + L + n = 1 + 2 + 2 = 5
+/// eigenvalues for two poses and two landmarks, counted by hand.
+#[test]
+fn spectrum_counts_landmarks() {
+    let graph = b"VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_XY 5 1 1\nVERTEX_XY 6 2 2\n\
+        EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2_XY 0 5 1 1 1 0 1\n\
+        EDGE_SE2_XY 1 5 0 1 1 0 1\nEDGE_SE2_XY 1 6 1 2 1 0 1\n";
+    let out = run_with_stdin("pgo-spectrum", &["-", "--json"], Some(graph));
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let json: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    assert_eq!(json["poses"], 2);
+    assert_eq!(json["landmarks"], 2);
+    assert_eq!(json["observations"], 3);
+    assert_eq!(json["eigenvalues"].as_array().unwrap().len(), 5);
+    let out = run_with_stdin("pgo-spectrum", &["-"], Some(graph));
+    assert!(text(&out.stdout).contains("landmarks:             2 (3 observations)\n"));
+    // A pose graph's report has neither field.
+    let plain = b"VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n";
+    let out = run_with_stdin("pgo-spectrum", &["-", "--json"], Some(plain));
+    let json: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    assert!(json.get("landmarks").is_none() && json.get("observations").is_none());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Solving (issue 13, item 2).
 

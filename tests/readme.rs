@@ -590,7 +590,12 @@ fn json_reports_are_documented() {
         ),
         (
             "pgo-spectrum",
-            &[(mit, "-k 3"), (warning, "-k 3"), (toy, "--weights unit")],
+            &[
+                (mit, "-k 3"),
+                (warning, "-k 3"),
+                (toy, "--weights unit"),
+                (landmarks, ""),
+            ],
         ),
         (
             "pgo-convert",

@@ -124,10 +124,19 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 fn text_report(r: &Report) -> String {
     let list = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");
     let yes = |b: bool| if b { "yes" } else { "no" };
+    let landmarks = if r.landmarks == 0 {
+        String::new()
+    } else {
+        format!(
+            "landmarks:             {} ({} observations)\n",
+            r.landmarks, r.observations
+        )
+    };
     format!(
-        "poses:                 {}\nedges:                 {}\nweights:               {}\neigenvalues of W:      {}\neigenvalues of W(l*):  {}\neigenvalues of M:      {}\nzero eigenvalues:      {} of W(l*)\nSZEP:                  {}\ntree:                  {}\nbalanced:              {}\n",
+        "poses:                 {}\nedges:                 {}\n{}weights:               {}\neigenvalues of W:      {}\neigenvalues of W(l*):  {}\neigenvalues of M:      {}\nzero eigenvalues:      {} of W(l*)\nSZEP:                  {}\ntree:                  {}\nbalanced:              {}\n",
         r.poses,
         r.edges,
+        landmarks,
         r.weights.name(),
         list(&r.eigenvalues),
         list(&r.penalized_eigenvalues),

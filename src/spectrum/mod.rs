@@ -65,6 +65,12 @@ pub struct Spectrum {
     pub weights: Weights,
     pub poses: usize,
     pub edges: usize,
+    /// Landmarks and their observations: rows of W beside the poses' (absent from JSON when
+    /// none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub landmarks: usize,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub observations: usize,
     /// Eigenvalues of W (all components merged).
     pub eigenvalues: Vec<f64>,
     /// Eigenvalues of W(lambda*).
@@ -190,6 +196,8 @@ pub fn spectrum(graph: &PoseGraph, options: &SpectrumOptions) -> crate::Result<S
         weights: policy,
         poses: graph.num_poses(),
         edges: graph.edges.len(),
+        landmarks: graph.landmarks.len(),
+        observations: graph.landmarks.observations.len(),
         eigenvalues: merge(|c| &c.eigenvalues),
         penalized_eigenvalues: merge(|c| &c.penalized_eigenvalues),
         rotation_eigenvalues: merge(|c| &c.rotation_eigenvalues),
@@ -234,4 +242,8 @@ fn dense_component(
         sdp_converged: a.dual.converged,
         eigen_converged: true,
     })
+}
+
+fn is_zero(v: &usize) -> bool {
+    *v == 0
 }
