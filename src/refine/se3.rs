@@ -361,7 +361,9 @@ mod tests {
         p
     }
 
-    /// A positive definite information with off-diagonal coupling.
+    /// A positive definite information with off-diagonal coupling (a symmetric matrix filled
+    /// by its indices).
+    #[allow(clippy::needless_range_loop)]
     fn information(rng: &mut Rng) -> SymMat6 {
         let mut m = [[0.0; 6]; 6];
         for (r, row) in m.iter_mut().enumerate() {
