@@ -479,8 +479,7 @@ fn options_that_do_not_apply_to_3d_are_refused_with_status_2() {
     let input = datasets_dir().join("tinyGrid3D.g2o");
     let output = dir.path("out.g2o");
     for flags in [
-        &["--refine"][..],
-        &["--robust", "tls"],
+        &["--robust", "tls"][..],
         &["--method", "sdp"],
         &["--refine", "--marginals", "m.txt"],
     ] {
@@ -537,6 +536,12 @@ fn toro_3d_with_two_components_and_a_fix_pose() {
     pgo::io::write3(&g, pgo::io::Format::Toro, &mut bytes).unwrap();
     let input = dir.file("two.graph", &bytes);
     let output = dir.path("two-opt.graph");
+    // --refine: g2o's error is not defined over Euler angles' information; refused, nothing
+    // written.
+    let refused = run("pgo-solve", &[s(&input), "-o", s(&output), "--refine"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(text(&refused.stderr).contains("Euler angles"));
+    assert!(!output.exists());
     let out = run("pgo-solve", &[s(&input), "-o", s(&output), "--json"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let r = json(&out);

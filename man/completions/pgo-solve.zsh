@@ -44,7 +44,7 @@ gm\:"Geman-McClure\: rho(r) = c^2 r^2 / (c^2 + r^2)"))' \
 '--strict[Treat unknown tags as errors instead of skipping them with a warning]' \
 '(--strict)--ignore-equiv[Skip TORO'\''s EQUIV lines (vertex merges, not implemented) with a warning instead of refusing the file\: the graph is then the file'\''s without them]' \
 '--allow-indefinite[Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)]' \
-'--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2) before writing it; the report'\''s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)]' \
+'--refine[Refine the certified estimate by Levenberg-Marquardt under the file'\''s full information matrices (g2o'\''s chi2; on SE(3)^n for 3D g2o graphs) before writing it; the report'\''s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)]' \
 '--all-edges-uncertain[With --robust\: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)]' \
 '--drop-outliers[With --robust\: write the estimate without the rejected edges (by default -o holds every edge as read)]' \
 '--fail-uncertified[Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way]' \

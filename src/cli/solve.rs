@@ -64,8 +64,10 @@ every edge as read, --drop-outliers only the inliers.";
 /// tau = 3/tr(inv(Omega_tt)), kappa = 3/(2*tr(inv(Omega_RR))), solved by the staircase on
 /// St(3, p)^n from rank 3 (--max-rank P: P - 1 lifts, up to rank P + 2) and certified by the
 /// inertia of one sparse LDL^T of S = Q - SymBlockDiag(Lambda) and the Lehmann-Maehly bound for
-/// its three null directions. --refine, --marginals, --robust and --method sdp do not apply to
-/// 3D graphs yet (exit status 2).
+/// its three null directions. --refine on a 3D g2o graph runs Levenberg-Marquardt on SE(3)^n
+/// under the full 6x6 information matrices (g2o's EDGE_SE3:QUAT error, translation and
+/// quaternion vector part). --marginals, --robust and --method sdp do not apply to 3D graphs yet
+/// (exit status 2), nor --refine to TORO 3D files (information over Euler angles).
 #[derive(Debug, Parser)]
 #[command(name = "pgo-solve", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -113,7 +115,8 @@ pub struct Args {
     pub staircase_budget: f64,
 
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
-    /// matrices (g2o's chi2) before writing it; the report's cost and bound stay those of the
+    /// matrices (g2o's chi2; on SE(3)^n for 3D g2o graphs) before writing it; the report's cost
+    /// and bound stay those of the
     /// certified estimate, chi2 before and after is added, and the report says that the written
     /// estimate is the refined one, which is not certified (check it with pgo-certify)
     #[arg(long)]
@@ -500,10 +503,6 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 /// given.
 fn refuse3(args: &Args) -> crate::Result<()> {
     let refused = [
-        (
-            args.refine,
-            "--refine (Levenberg-Marquardt under the full information)",
-        ),
         (args.marginals.is_some(), "--marginals"),
         (args.robust.is_some(), "--robust (graduated non-convexity)"),
         (
@@ -555,7 +554,7 @@ fn run3(
         solver: args.solver.unwrap_or(SdpSolver::Ipm),
         weights: args.weights.weights,
         tolerance: args.tol,
-        refine: false,
+        refine: args.refine,
         max_rank: args.max_rank as usize,
         staircase_budget: args.staircase_budget * 1e9,
     };
@@ -585,11 +584,16 @@ fn run3(
             "pgo-solve: warning: --solver had no effect: 3D graphs are solved by the staircase"
         );
     }
+    let refined = solution.refined_chi2.is_some();
     let report = Report3 {
         solution: &solution,
-        written_estimate: "solved",
-        written_chi2: solution.chi2,
-        written_certified: solution.certified,
+        written_estimate: if refined { "refined" } else { "solved" },
+        written_chi2: if refined {
+            solution.refined_chi2
+        } else {
+            solution.chi2
+        },
+        written_certified: !refined && solution.certified,
         warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
         timings: (!args.no_timings).then_some(Timings {
             read_s,
@@ -675,7 +679,9 @@ fn text_report3(input: &str, report: &Report3) -> String {
     }
     out += &row(
         "result",
-        if r.certified {
+        if r.certified && r.refined_chi2.is_some() {
+            "certified optimal within the bound above (the estimate before refinement)".to_string()
+        } else if r.certified {
             "certified optimal within the bound above".to_string()
         } else {
             "NOT certified within --tol; the bound above still holds".to_string()
@@ -683,6 +689,26 @@ fn text_report3(input: &str, report: &Report3) -> String {
     );
     if let Some(why) = &r.not_certified_because {
         out += &row("why not certified", why.clone());
+    }
+    if let Some(chi2) = r.refined_chi2 {
+        let before: f64 = r.components.iter().filter_map(|c| c.certified_chi2).sum();
+        out += &row(
+            "refined (LM, chi2)",
+            format!(
+                "{} -> {} (full 6x6 information matrices)",
+                num(before),
+                num(chi2)
+            ),
+        );
+    }
+    if report.written_estimate == "refined" {
+        out += &row(
+            "written estimate",
+            format!(
+                "refined by LM (chi2 {}), not the certified one; certify it with pgo-certify",
+                report.written_chi2.map_or("undefined".into(), num)
+            ),
+        );
     }
     if let Some(t) = &report.timings {
         out += &row(

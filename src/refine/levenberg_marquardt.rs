@@ -20,19 +20,8 @@
 //!                  [  0          −1        ]                          [ 0   1 ]
 //! ```
 //!
-//! Each iteration assembles, in one pass over the edges, the gradient g = Σ Jᵀ Ω e and the upper
-//! triangle of H = Σ Jᵀ Ω J (3m x 3m over the m free poses, block sparse, written in place into a
-//! pattern built once), and solves (H + λ I) δ = −g by sparse Cholesky. The symbolic analysis
-//! (AMD ordering, elimination tree, supernodes) is done once per call and reused by every
-//! numeric factorization, into a factor buffer and a workspace also allocated once (faer's
-//! `SymbolicCholesky`, the analysis `SymbolicLlt` wraps, used directly so that `Llt` does not
-//! allocate per factorization); all runs sequentially, so results do not depend on the thread
-//! count.
-//!
-//! Damping, as g2o's `OptimizationAlgorithmLevenberg`: λ₀ = 10⁻⁵ · max_k H_kk; a trial step is
-//! accepted iff chi2 decreases, and then, with ρ = (chi2 − chi2_trial) / δᵀ(λ δ − g) (actual over
-//! predicted decrease), λ ← λ · min(2/3, max(1/3, 1 − (2ρ − 1)³)) and ν ← 2 (Nielsen's rule with
-//! g2o's bounds); a rejected step or a failed factorization sets λ ← λ ν, ν ← 2ν.
+//! The normal equations (3x3 blocks, sparse Cholesky analysed once) and the damping schedule
+//! are shared with the SE(3) refinement: [`super::damped`].
 //!
 //! Landmarks (issue 13): a landmark l_k is one more vertex after the n poses, (x, y) with a θ
 //! that nothing measures, and its observation from pose i with measurement d and 2x2 information
@@ -44,53 +33,11 @@
 //! Gauge: the graph's FIX poses are held; every connected component without one holds its
 //! first pose (smallest index). Held poses are returned unchanged.
 
+use super::damped::{Block, BlockSystem, levenberg, quadratic};
+pub use super::damped::{RefineOptions, Stop};
 use crate::graph::{Pose2, PoseGraph, SymMat3, VertexId};
 use crate::simulate::wrap_angle;
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par, Side};
 use thiserror::Error;
-
-/// Options of [`refine`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RefineOptions {
-    /// Largest number of iterations (linearizations). Default 100.
-    pub max_iterations: usize,
-    /// Converged when a step changes chi2 by less than `tol · chi2` (relative decrease below
-    /// `tol`, or a rejected step whose increase is below it: rounding level). Default 1e-12:
-    /// above the ~1e-14 rounding of a sum of 10⁴ terms, and LM converges quadratically near a
-    /// minimum, so the chi2 reached is then exact to far better than 1e-12.
-    pub tol: f64,
-    /// Trials (damping increases) per iteration before giving up, as g2o's
-    /// `maxTrialsAfterFailure`. Default 10.
-    pub max_trials: usize,
-}
-
-impl Default for RefineOptions {
-    fn default() -> Self {
-        Self {
-            max_iterations: 100,
-            tol: 1e-12,
-            max_trials: 10,
-        }
-    }
-}
-
-/// Why [`refine`] stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Stop {
-    /// A step changed chi2 by less than `tol · chi2`, or chi2 is zero.
-    Converged,
-    /// `max_iterations` reached.
-    MaxIterations,
-    /// `max_trials` damped steps in a row failed to decrease chi2 (or to factor).
-    NoDecrease,
-}
 
 /// The result of [`refine`].
 #[derive(Debug, Clone, PartialEq)]
@@ -232,80 +179,29 @@ pub fn refine(
     for &k in &result.held {
         is_held[k] = true;
     }
-    let mut system = NormalEquations::new(&factors, &is_held)?;
+    let pairs: Vec<(usize, usize)> = factors.iter().map(|f| (f.i, f.j)).collect();
+    let mut system = BlockSystem::<3>::new(&pairs, &is_held).map_err(RefineError::Analysis)?;
     if initial_chi2 == 0.0 || system.dim == 0 {
         result.poses = poses;
         result.converged = true;
         result.stop = Stop::Converged;
         return Ok(result);
     }
-    let dim = system.dim;
-    let mut chi = initial_chi2;
-    let mut trial = poses.clone();
-    let mut step = vec![0.0; dim];
-    let mut lambda = 0.0;
-    let mut nu = 2.0;
-    'outer: while result.iterations < options.max_iterations {
-        result.iterations += 1;
-        system.assemble(&factors, &poses);
-        if result.iterations == 1 {
-            let max_diag = system.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-            lambda = if max_diag > 0.0 && max_diag.is_finite() {
-                1e-5 * max_diag
-            } else {
-                1e-5
-            };
-        }
-        let mut trials = 0;
-        loop {
-            trials += 1;
-            result.factorizations += 1;
-            let solved = system.solve(lambda, &mut step);
-            let chi_trial = if solved {
-                system.retract(&poses, &step, &mut trial);
-                total_chi2(&factors, &trial)
-            } else {
-                f64::INFINITY
-            };
-            if chi_trial < chi {
-                let predicted: f64 = step
-                    .iter()
-                    .zip(&system.grad)
-                    .map(|(d, g)| d * (lambda * d - g))
-                    .sum();
-                let rho = (chi - chi_trial) / predicted;
-                let alpha = 1.0 - (2.0 * rho - 1.0).powi(3);
-                lambda *= if alpha.is_nan() {
-                    1.0 / 3.0
-                } else {
-                    alpha.clamp(1.0 / 3.0, 2.0 / 3.0)
-                };
-                nu = 2.0;
-                let small = chi - chi_trial < options.tol * chi;
-                std::mem::swap(&mut poses, &mut trial);
-                chi = chi_trial;
-                if small || chi == 0.0 {
-                    result.stop = Stop::Converged;
-                    break 'outer;
-                }
-                break;
-            }
-            if chi_trial - chi < options.tol * chi {
-                // The step changes chi2 by less than the tolerance: stationary to rounding.
-                result.stop = Stop::Converged;
-                break 'outer;
-            }
-            lambda *= nu;
-            nu *= 2.0;
-            if trials >= options.max_trials || !lambda.is_finite() {
-                result.stop = Stop::NoDecrease;
-                break 'outer;
-            }
-        }
-    }
+    let outcome = levenberg(
+        &mut system,
+        &mut poses,
+        initial_chi2,
+        options,
+        |system, poses| assemble(system, &factors, poses),
+        |poses| total_chi2(&factors, poses),
+        retract,
+    );
+    result.iterations = outcome.iterations;
+    result.factorizations = outcome.factorizations;
+    result.stop = outcome.stop;
     result.converged = result.stop == Stop::Converged;
     result.poses = poses;
-    result.chi2 = chi;
+    result.chi2 = outcome.chi2;
     Ok(result)
 }
 
@@ -428,8 +324,6 @@ struct Factor {
     omega: [[f64; 3]; 3],
 }
 
-type Mat3 = [[f64; 3]; 3];
-
 impl Factor {
     fn new(i: usize, j: usize, z: Pose2, info: SymMat3) -> Self {
         let [a, b, c, d, e, f] = info.0;
@@ -468,7 +362,7 @@ impl Factor {
     }
 
     /// e, ∂e/∂x_i and ∂e/∂x_j (module docs).
-    fn linearize(&self, a: &Pose2, b: &Pose2) -> ([f64; 3], Mat3, Mat3) {
+    fn linearize(&self, a: &Pose2, b: &Pose2) -> ([f64; 3], Block<3>, Block<3>) {
         let (u, e, si, ci) = self.error_parts(a, b);
         let (cz, sz) = (self.cz, self.sz);
         // A = R(−φ), φ = θ_i + θ_z.
@@ -480,250 +374,35 @@ impl Factor {
     }
 }
 
-fn quadratic(m: &Mat3, e: &[f64; 3]) -> f64 {
-    (0..3)
-        .map(|r| e[r] * (m[r][0] * e[0] + m[r][1] * e[1] + m[r][2] * e[2]))
-        .sum()
-}
-
 fn total_chi2(factors: &[Factor], poses: &[Pose2]) -> f64 {
     factors.iter().map(|f| f.chi2(poses)).sum()
 }
 
-/// aᵀ b for 3x3 matrices.
-fn at_b(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut m = [[0.0; 3]; 3];
-    for (r, row) in m.iter_mut().enumerate() {
-        for (c, v) in row.iter_mut().enumerate() {
-            *v = a[0][r] * b[0][c] + a[1][r] * b[1][c] + a[2][r] * b[2][c];
+/// H and g at `poses`, in one pass over the factors.
+fn assemble(system: &mut BlockSystem<3>, factors: &[Factor], poses: &[Pose2]) {
+    system.clear();
+    for (k, f) in factors.iter().enumerate() {
+        if !system.moves(f.i, f.j) {
+            continue; // a self-loop's error is constant; held poses have no variables
         }
+        let (e, ji, jj) = f.linearize(&poses[f.i], &poses[f.j]);
+        system.add(k, f.i, f.j, &e, &f.omega, &ji, &jj);
     }
-    m
+    system.finish();
 }
 
-fn mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut m = [[0.0; 3]; 3];
-    for (r, row) in m.iter_mut().enumerate() {
-        for (c, v) in row.iter_mut().enumerate() {
-            *v = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
-        }
-    }
-    m
-}
-
-/// The damped normal equations over the free poses, with their Cholesky analysis.
-struct NormalEquations {
-    /// 3 · (number of free poses).
-    dim: usize,
-    /// Block (free pose) index of every pose; `usize::MAX` for a held pose.
-    block: Vec<usize>,
-    /// Pattern of the upper triangle of H: column 3b + c holds, for every free pose a < b
-    /// sharing an edge with b (ascending), rows 3a..3a+3, then rows 3b..=3b+c.
-    pattern: SymbolicSparseColMat<usize>,
-    /// Per factor: offset, within the columns of block max(b_i, b_j), of the off-diagonal block.
-    offset: Vec<usize>,
-    /// Per block b: offset of the diagonal block within its columns (3 · off-diagonal blocks).
-    diag_offset: Vec<usize>,
-    /// H (upper triangle, undamped until [`Self::solve`] damps the diagonal) and g.
-    values: Vec<f64>,
-    grad: Vec<f64>,
-    /// Positions of H_kk in `values`, and the undamped H_kk.
-    diag_pos: Vec<usize>,
-    diag: Vec<f64>,
-    symbolic: SymbolicCholesky<usize>,
-    factor: Vec<f64>,
-    mem: MemBuffer,
-}
-
-impl NormalEquations {
-    fn new(factors: &[Factor], held: &[bool]) -> Result<Self, RefineError> {
-        let mut block = vec![usize::MAX; held.len()];
-        let mut m = 0;
-        for (b, &h) in block.iter_mut().zip(held) {
-            if !h {
-                *b = m;
-                m += 1;
-            }
-        }
-        // Off-diagonal blocks (a, b), a < b, grouped by b, sorted and deduplicated.
-        let pair = |f: &Factor| {
-            let (bi, bj) = (block[f.i], block[f.j]);
-            (bi != usize::MAX && bj != usize::MAX && bi != bj).then(|| (bi.min(bj), bi.max(bj)))
+/// `out` = `poses` ⊕ `step`: free poses moved additively, θ wrapped; held poses copied.
+fn retract(system: &BlockSystem<3>, poses: &[Pose2], step: &[f64], out: &mut [Pose2]) {
+    for ((o, p), &b) in out.iter_mut().zip(poses).zip(&system.block) {
+        *o = if b == usize::MAX {
+            *p
+        } else {
+            Pose2::new(
+                p.x + step[3 * b],
+                p.y + step[3 * b + 1],
+                wrap_angle(p.theta + step[3 * b + 2]),
+            )
         };
-        let mut start = vec![0usize; m + 1];
-        for (_, b) in factors.iter().filter_map(pair) {
-            start[b + 1] += 1;
-        }
-        for b in 0..m {
-            start[b + 1] += start[b];
-        }
-        let mut fill = start.clone();
-        let mut rows = vec![0usize; start[m]];
-        for (a, b) in factors.iter().filter_map(pair) {
-            rows[fill[b]] = a;
-            fill[b] += 1;
-        }
-        let mut neighbours = Vec::with_capacity(rows.len());
-        let mut nstart = vec![0usize; m + 1];
-        for b in 0..m {
-            let seg = &mut rows[start[b]..start[b + 1]];
-            seg.sort_unstable();
-            for (k, &a) in seg.iter().enumerate() {
-                if k == 0 || seg[k - 1] != a {
-                    neighbours.push(a);
-                }
-            }
-            nstart[b + 1] = neighbours.len();
-        }
-        let dim = 3 * m;
-        let mut col_ptr = Vec::with_capacity(dim + 1);
-        let mut row_idx = Vec::new();
-        let mut diag_offset = Vec::with_capacity(m);
-        let mut diag_pos = Vec::with_capacity(dim);
-        col_ptr.push(0);
-        for b in 0..m {
-            let nb = &neighbours[nstart[b]..nstart[b + 1]];
-            diag_offset.push(3 * nb.len());
-            for c in 0..3 {
-                row_idx.extend(nb.iter().flat_map(|&a| [3 * a, 3 * a + 1, 3 * a + 2]));
-                row_idx.extend(3 * b..=3 * b + c);
-                diag_pos.push(row_idx.len() - 1);
-                col_ptr.push(row_idx.len());
-            }
-        }
-        let offset = factors
-            .iter()
-            .map(|f| match pair(f) {
-                Some((a, b)) => {
-                    let nb = &neighbours[nstart[b]..nstart[b + 1]];
-                    3 * nb.binary_search(&a).expect("every pair is in the pattern")
-                }
-                None => 0,
-            })
-            .collect();
-        let nnz = row_idx.len();
-        let pattern = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| RefineError::Analysis(format!("{e:?}")))?;
-        let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]);
-        let mem = MemBuffer::try_new(scratch)
-            .map_err(|_| RefineError::Analysis("out of memory".into()))?;
-        Ok(NormalEquations {
-            dim,
-            block,
-            pattern,
-            offset,
-            diag_offset,
-            values: vec![0.0; nnz],
-            grad: vec![0.0; dim],
-            diag_pos,
-            diag: vec![0.0; dim],
-            factor: vec![0.0; symbolic.len_val()],
-            symbolic,
-            mem,
-        })
-    }
-
-    /// H and g at `poses`, in one pass over the factors.
-    fn assemble(&mut self, factors: &[Factor], poses: &[Pose2]) {
-        self.values.fill(0.0);
-        self.grad.fill(0.0);
-        let col_ptr = self.pattern.col_ptr();
-        let values = &mut self.values;
-        for (f, &offset) in factors.iter().zip(&self.offset) {
-            let (bi, bj) = (self.block[f.i], self.block[f.j]);
-            if f.i == f.j || (bi == usize::MAX && bj == usize::MAX) {
-                continue; // a self-loop's error is constant; held poses have no variables
-            }
-            let (e, ji, jj) = f.linearize(&poses[f.i], &poses[f.j]);
-            let oe = [
-                f.omega[0][0] * e[0] + f.omega[0][1] * e[1] + f.omega[0][2] * e[2],
-                f.omega[1][0] * e[0] + f.omega[1][1] * e[1] + f.omega[1][2] * e[2],
-                f.omega[2][0] * e[0] + f.omega[2][1] * e[1] + f.omega[2][2] * e[2],
-            ];
-            let oji = mul(&f.omega, &ji);
-            let ojj = mul(&f.omega, &jj);
-            for (b, jac, ojac) in [(bi, &ji, &oji), (bj, &jj, &ojj)] {
-                if b == usize::MAX {
-                    continue;
-                }
-                let h = at_b(jac, ojac);
-                for c in 0..3 {
-                    let base = col_ptr[3 * b + c] + self.diag_offset[b];
-                    for (r, hr) in h.iter().enumerate().take(c + 1) {
-                        values[base + r] += hr[c];
-                    }
-                    self.grad[3 * b + c] +=
-                        jac[0][c] * oe[0] + jac[1][c] * oe[1] + jac[2][c] * oe[2];
-                }
-            }
-            if bi != usize::MAX && bj != usize::MAX {
-                // H_{b_i b_j} = J_iᵀ Ω J_j; the stored block is the one above the diagonal.
-                let hij = at_b(&ji, &ojj);
-                let (col, transposed) = if bi < bj { (bj, false) } else { (bi, true) };
-                for c in 0..3 {
-                    let base = col_ptr[3 * col + c] + offset;
-                    for r in 0..3 {
-                        values[base + r] += if transposed { hij[c][r] } else { hij[r][c] };
-                    }
-                }
-            }
-        }
-        for (d, &p) in self.diag.iter_mut().zip(&self.diag_pos) {
-            *d = self.values[p];
-        }
-    }
-
-    /// Solves (H + λ I) δ = −g into `step`; false if the factorization fails.
-    fn solve(&mut self, lambda: f64, step: &mut [f64]) -> bool {
-        for (&p, &d) in self.diag_pos.iter().zip(&self.diag) {
-            self.values[p] = d + lambda;
-        }
-        let h = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
-        let Ok(llt) = self.symbolic.factorize_numeric_llt(
-            &mut self.factor,
-            h,
-            Side::Upper,
-            LltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-            Default::default(),
-        ) else {
-            return false;
-        };
-        for (s, g) in step.iter_mut().zip(&self.grad) {
-            *s = -g;
-        }
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(step, self.dim, 1),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
-        step.iter().all(|s| s.is_finite())
-    }
-
-    /// `out` = `poses` ⊕ `step`: free poses moved additively, θ wrapped; held poses copied.
-    fn retract(&self, poses: &[Pose2], step: &[f64], out: &mut [Pose2]) {
-        for ((o, p), &b) in out.iter_mut().zip(poses).zip(&self.block) {
-            *o = if b == usize::MAX {
-                *p
-            } else {
-                Pose2::new(
-                    p.x + step[3 * b],
-                    p.y + step[3 * b + 1],
-                    wrap_angle(p.theta + step[3 * b + 2]),
-                )
-            };
-        }
     }
 }
 
@@ -918,8 +597,9 @@ mod tests {
         for k in gauge(&g) {
             held[k] = true;
         }
-        let mut system = NormalEquations::new(&factors, &held).unwrap();
-        system.assemble(&factors, &poses);
+        let pairs: Vec<(usize, usize)> = factors.iter().map(|f| (f.i, f.j)).collect();
+        let mut system = BlockSystem::<3>::new(&pairs, &held).unwrap();
+        assemble(&mut system, &factors, &poses);
         let dim = system.dim;
         assert_eq!(dim, 18);
         // H from the stored upper triangle.

@@ -29,11 +29,14 @@ pub struct Solution3 {
     pub edges: usize,
     /// f at the estimate (SE-Sync's objective with its weights).
     pub cost: f64,
-    /// g2o's chi2 of the estimate (EDGE_SE3:QUAT's error: translation and quaternion vector
-    /// part of z⁻¹·x_i⁻¹·x_j, w ≥ 0); `None` for TORO files.
+    /// g2o's chi2 of the certified estimate (EDGE_SE3:QUAT's error: translation and quaternion
+    /// vector part of z⁻¹·x_i⁻¹·x_j, w ≥ 0); `None` for TORO files.
     pub chi2: Option<f64>,
     pub lower_bound: f64,
     pub suboptimality_bound: f64,
+    /// With refinement: g2o's chi2 of the returned (refined) estimate, summed over components.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refined_chi2: Option<f64>,
     pub relative_suboptimality_bound: f64,
     pub certified: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -142,41 +145,34 @@ fn pose_in(form: Form3, m: &Isometry3<f64>) -> Pose3 {
     }
 }
 
-/// g2o's chi2 of poses under the full information matrices (g2o files; `None` for TORO's,
-/// whose information is over Euler angles, or where not finite).
+/// g2o's chi2 of poses under the full information matrices ([`crate::refine::chi2_3`]: g2o
+/// files; `None` for TORO's, whose information is over Euler angles, or where not finite).
 pub fn chi2_3(graph: &Graph3, poses: &[Pose3]) -> Option<f64> {
     if graph.form != Form3::G2o {
         return None;
     }
     let x: Vec<Isometry3<f64>> = poses.iter().map(|p| p.to_isometry()).collect();
-    let mut total = 0.0;
-    for e in &graph.edges {
-        let d = e.measurement.to_isometry().inverse() * (x[e.i].inverse() * x[e.j]);
-        let q = d.rotation.quaternion();
-        let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-        let t = d.translation.vector;
-        let v = [t.x, t.y, t.z, s * q.i, s * q.j, s * q.k];
-        for a in 0..6 {
-            for b in 0..6 {
-                total += v[a] * e.information.get(a, b) * v[b];
-            }
-        }
-    }
-    total.is_finite().then_some(total)
+    Some(crate::refine::chi2_3(graph, &x)).filter(|c| c.is_finite())
 }
 
 /// Solves every connected component of a 3D graph to a certified optimum where SE-Sync's
 /// relaxation is exact, and bounds the suboptimality where it is not. Newton steps are
 /// reported through [`crate::progress`].
 ///
+/// With `options.refine`, each component's certified estimate is then refined by
+/// Levenberg-Marquardt under the full 6x6 information matrices ([`crate::refine::refine3`]: g2o's
+/// chi2, another objective than f), holding the gauge pose; the estimate returned is the refined
+/// one, which the certificate is not about (`certified_chi2` and `refined_chi2` per component).
+///
 /// # Errors
 ///
-/// Options that do not apply to 3D graphs yet (`refine`, `method` sdp), an information matrix
-/// without isotropic weights, several FIX poses in one component, a self-loop.
+/// Options that do not apply to 3D graphs (`method` sdp; `refine` on a TORO file, whose
+/// information is over Euler angles), an information matrix without isotropic weights, several
+/// FIX poses in one component, a self-loop.
 pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3> {
-    if options.refine {
+    if options.refine && graph.form != Form3::G2o {
         return Err(Error::Invalid(
-            "--refine: refinement under the full information matrices is not implemented for 3D graphs yet".into(),
+            "--refine: the information matrices of TORO 3D files (EDGE3) are over Euler angles, whose error g2o's refinement does not define; refine g2o files (EDGE_SE3:QUAT)".into(),
         ));
     }
     if options.method == Method::Sdp {
@@ -195,6 +191,8 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
         ..Default::default()
     };
     let mut estimate = graph.poses.clone();
+    // The certified estimate, which `estimate` leaves with --refine.
+    let mut certified_estimate = graph.poses.clone();
     let mut reports = Vec::new();
     let mut step = 0u64;
     for (part, members) in &parts {
@@ -225,6 +223,20 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
         let deflated = s.bound.and_then(|b| b.deflated);
         let suboptimality_bound = s.cost - s.lower_bound;
         let part_estimate: Vec<Pose3> = members.iter().map(|&k| estimate[k]).collect();
+        let certified_chi2 = chi2_3(part, &part_estimate);
+        for (pose, &at) in part_estimate.iter().zip(members) {
+            certified_estimate[at] = *pose;
+        }
+        let mut refined = None;
+        if options.refine {
+            // Levenberg-Marquardt holds the FIX pose (or the first) where it is.
+            crate::progress::phase("refinement (Levenberg-Marquardt, SE(3))");
+            let r = crate::refine::refine3(part, &part_estimate, &Default::default())?;
+            for (pose, &at) in r.poses.iter().zip(members) {
+                estimate[at] = *pose;
+            }
+            refined = Some(r);
+        }
         reports.push(ComponentReport {
             first_id: part.ids[0],
             poses: part.num_poses(),
@@ -246,9 +258,9 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
             iterations: Some(s.iterations),
             eta: s.bound.map(|b| b.eta),
             gradient_norm: Some(s.gradient_norm),
-            certified_chi2: chi2_3(part, &part_estimate),
-            refined_chi2: None,
-            refine_iterations: None,
+            certified_chi2,
+            refined_chi2: refined.as_ref().map(|r| r.chi2),
+            refine_iterations: refined.as_ref().map(|r| r.iterations),
             not_certified_because: s.not_certified_because.clone(),
         });
     }
@@ -268,6 +280,7 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
             })
         })
         .collect();
+    let chi2 = chi2_3(graph, &certified_estimate);
     Ok(Solution3 {
         dimension: 3,
         method: options.method,
@@ -275,9 +288,12 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
         poses: graph.num_poses(),
         edges: graph.edges.len(),
         cost,
-        chi2: chi2_3(graph, &estimate),
+        chi2,
         lower_bound,
         suboptimality_bound,
+        refined_chi2: options
+            .refine
+            .then(|| reports.iter().filter_map(|c| c.refined_chi2).sum()),
         relative_suboptimality_bound: suboptimality_bound / cost.abs().max(1.0),
         certified,
         not_certified_because: (!certified && !why.is_empty()).then(|| why.join("; ")),
