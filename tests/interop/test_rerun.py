@@ -708,3 +708,31 @@ def test_simulate_records_a_3d_world(tmp_path):
     assert len(vertices) == 36
     check_graph_3d(rec, "graph", vertices, edges)
     assert len(rec.values("/graph/odometry", "LineStrips3D:strips")) == 35  # the path
+
+
+def test_convert_and_certify_record_a_3d_graph(tmp_path):
+    src = tmp_path / "grid.g2o"
+    run("pgo-simulate", ["--world", "grid", "-n", "27", "--seed", "1", "-q", "-o", src], tmp_path)
+    vertices, edges = read_g2o_3d(src)
+    plain = run("pgo-convert", ["--stats", src], tmp_path)
+    recorded = run("pgo-convert", ["--stats", src, "--rerun-save", "c.rrd"], tmp_path)
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    verify(tmp_path / "c.rrd")
+    rec = Recording(tmp_path / "c.rrd")
+    assert rec.paths() == {*(f"/graph/{n}" for n in ("poses", "headings", "odometry", "loop_closures")), "/report/graph"}
+    check_graph_3d(rec, "graph", vertices, edges)
+    # pgo-certify on the ground truth (not optimal under noise: exit 1): the estimate recorded
+    # and the report's numbers.
+    plain = run("pgo-certify", [src, "--json"], tmp_path, check=False)
+    recorded = run("pgo-certify", [src, "--json", "--rerun-save", "v.rrd"], tmp_path, check=False)
+    assert plain.returncode == recorded.returncode == 1
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    report = json.loads(plain.stdout)
+    verify(tmp_path / "v.rrd")
+    rec = Recording(tmp_path / "v.rrd")
+    assert rec.application_id == "pgo-certify"
+    check_graph_3d(rec, "graph", vertices, edges)
+    cert = rec.static["/report/certificate"]
+    assert cert["cost"] == [report["cost"]]
+    assert cert["lower_bound"] == [report["lower_bound"]]
+    assert cert["certified"] == [0.0]
