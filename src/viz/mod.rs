@@ -605,4 +605,52 @@ mod tests {
         assert_eq!(r.observe(|| 5), 5);
         r.finish().unwrap();
     }
+
+    /// 3D graphs: one point and arrow per pose, edges split as in 2D, and the residuals the
+    /// terms of f, summing to the solver's cost tr(XᵀQX) of the same poses (Q assembled in
+    /// se3::problem, the terms here evaluated directly).
+    #[test]
+    fn graph3_entities_and_residuals_sum_to_the_cost() {
+        use crate::simulate::space::{SpaceConfig, World3, simulate3};
+        use crate::simulate::{RotationNoise, TranslationNoise};
+        let sim = simulate3(&SpaceConfig {
+            world: World3::Torus,
+            n: 25,
+            side: 10.0,
+            loop_probability: 1.0,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.2 },
+            seed: 1,
+        });
+        let g = &sim.graph;
+        let v = graph3_entities("graph", g);
+        let Item::Points3 { positions, .. } = &v[0].item else {
+            panic!("poses")
+        };
+        assert_eq!(positions.len(), 25);
+        let Item::Arrows3 { vectors, .. } = &v[1].item else {
+            panic!("headings")
+        };
+        assert_eq!(vectors.len(), 25);
+        let count = |k: usize| match &v[k].item {
+            Item::Strips3 { strips, .. } => strips.len(),
+            _ => panic!("strips"),
+        };
+        assert_eq!(count(2), 24, "the odometry path");
+        assert_eq!(count(2) + count(3), g.edges.len());
+        let w = crate::se3::problem::weights3(g, false).unwrap();
+        let e = residual3_entity("optimized/residuals", g, &w);
+        let total: f64 = e
+            .values
+            .iter()
+            .find(|(n, _)| *n == "residual")
+            .unwrap()
+            .1
+            .iter()
+            .sum();
+        let problem = crate::se3::problem::Problem3::new(g, &w, 0);
+        let truth: Vec<_> = g.poses.iter().map(crate::se3::rt_of).collect();
+        let cost = problem.cost(&crate::se3::rounding::point_of(&problem, &truth));
+        assert!((total - cost).abs() <= 1e-9 * cost, "{total} vs {cost}");
+    }
 }
