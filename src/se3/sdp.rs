@@ -138,7 +138,7 @@ pub fn solve_relaxation(m: &DMatrix<f64>) -> Result<Relaxation3, String> {
         DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
     };
     let dim = m.nrows();
-    if m.ncols() != dim || dim % 3 != 0 || m.iter().any(|v| !v.is_finite()) {
+    if m.ncols() != dim || !dim.is_multiple_of(3) || m.iter().any(|v| !v.is_finite()) {
         return Err("M must be a finite 3n x 3n matrix".into());
     }
     let n = dim / 3;

@@ -292,8 +292,12 @@ fn grid_cell(i: usize, m: usize) -> [usize; 3] {
     let z = i / (m * m);
     let k = i % (m * m);
     let (row, col) = (k / m, k % m);
-    let y = if z % 2 == 0 { row } else { m - 1 - row };
-    let x = if (z * m + row) % 2 == 0 {
+    let y = if z.is_multiple_of(2) {
+        row
+    } else {
+        m - 1 - row
+    };
+    let x = if (z * m + row).is_multiple_of(2) {
         col
     } else {
         m - 1 - col
@@ -304,8 +308,12 @@ fn grid_cell(i: usize, m: usize) -> [usize; 3] {
 /// The path position of lattice cell c (the inverse of [`grid_cell`]).
 fn grid_index(c: [usize; 3], m: usize) -> usize {
     let [x, y, z] = c;
-    let row = if z % 2 == 0 { y } else { m - 1 - y };
-    let col = if (z * m + row) % 2 == 0 { x } else { m - 1 - x };
+    let row = if z.is_multiple_of(2) { y } else { m - 1 - y };
+    let col = if (z * m + row).is_multiple_of(2) {
+        x
+    } else {
+        m - 1 - x
+    };
     z * m * m + row * m + col
 }
 
