@@ -1,4 +1,4 @@
-//! Random planar pose graphs by the measurement model of the paper's simulations (Calafiore,
+//! Random planar pose graphs (and, in [`space`], SE(3) graphs on the 3D benchmark worlds) by the measurement model of the paper's simulations (Calafiore,
 //! Carlone and Dellaert, Sec. 6 "Simulation setup", eq. (47)), seeded and reproducible.
 //!
 //! The model:
@@ -51,6 +51,8 @@
 //!
 //! Edges are written in ascending (i, j) order: after the odometry edge (i, i+1) come the loop
 //! closures (i, j), j > i + 1.
+
+pub mod space;
 
 use crate::error::Error;
 use crate::graph::{

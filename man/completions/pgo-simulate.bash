@@ -23,12 +23,16 @@ _pgo__simulate() {
 
     case "${cmd}" in
         pgo__simulate)
-            opts="-n -o -q -h -V --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --landmarks --landmark-range --output --to --quiet --corrupt --outliers --outlier-model --group --outlier-list --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-n -o -q -h -V --world --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --seed --side --landmarks --landmark-range --output --to --quiet --corrupt --outliers --outlier-model --group --outlier-list --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
             fi
             case "${prev}" in
+                --world)
+                    COMPREPLY=($(compgen -W "planar sphere torus grid" -- "${cur}"))
+                    return 0
+                    ;;
                 --poses)
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0

@@ -1,6 +1,10 @@
+complete -c pgo-simulate -l world -d 'The world: planar (the paper\'s model (47)), or an SE(3) world written as g2o 3D (see 3D worlds below)' -r -f -a "planar\t'Planar poses by the paper\'s model (47)'
+sphere\t'SE(3) poses on rings of latitude of a sphere (like sphere2500)'
+torus\t'SE(3) poses on rings around a torus (like torus3D)'
+grid\t'SE(3) poses walking a cubic lattice (like grid3D)'"
 complete -c pgo-simulate -s n -l poses -d 'Number of poses (ids 0..N-1)' -r
-complete -c pgo-simulate -l loop-probability -d 'Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose)' -r
-complete -c pgo-simulate -l loop-model -d 'Which loop closures are drawn' -r -f -a "pairs\t'The paper\'s model (47): every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures: for small n)'
+complete -c pgo-simulate -l loop-probability -d 'Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose; in a 3D world each candidate) [default: 0.1, 1 in a 3D world]' -r
+complete -c pgo-simulate -l loop-model -d 'Which loop closures are drawn (planar) [default: pairs]' -r -f -a "pairs\t'The paper\'s model (47): every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures: for small n)'
 per-pose\t'Each pose j >= 2 with probability P_c closes one loop to an earlier pose drawn uniformly (about P_c n loop closures: linear in n)'"
 complete -c pgo-simulate -l rotation-noise -d 'Rotation noise e_R: gaussian:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi])' -r
 complete -c pgo-simulate -l translation-noise -d 'Translation noise e_Delta: gaussian:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform:HALFWIDTH (uniform in [-HALFWIDTH, HALFWIDTH]^2)' -r

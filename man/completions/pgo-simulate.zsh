@@ -15,10 +15,14 @@ _pgo-simulate() {
 
     local context curcontext="$curcontext" state line
     _arguments "${_arguments_options[@]}" : \
+'--world=[The world\: planar (the paper'\''s model (47)), or an SE(3) world written as g2o 3D (see 3D worlds below)]:WORLD:((planar\:"Planar poses by the paper'\''s model (47)"
+sphere\:"SE(3) poses on rings of latitude of a sphere (like sphere2500)"
+torus\:"SE(3) poses on rings around a torus (like torus3D)"
+grid\:"SE(3) poses walking a cubic lattice (like grid3D)"))' \
 '-n+[Number of poses (ids 0..N-1)]:N:_default' \
 '--poses=[Number of poses (ids 0..N-1)]:N:_default' \
-'--loop-probability=[Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose)]:P:_default' \
-'--loop-model=[Which loop closures are drawn]:MODEL:((pairs\:"The paper'\''s model (47)\: every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures\: for small n)"
+'--loop-probability=[Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair independently (per pose with --loop-model per-pose; in a 3D world each candidate) \[default\: 0.1, 1 in a 3D world\]]:P:_default' \
+'--loop-model=[Which loop closures are drawn (planar) \[default\: pairs\]]:MODEL:((pairs\:"The paper'\''s model (47)\: every pair (i, j), j > i + 1, with probability P_c (about P_c n^2/2 loop closures\: for small n)"
 per-pose\:"Each pose j >= 2 with probability P_c closes one loop to an earlier pose drawn uniformly (about P_c n loop closures\: linear in n)"))' \
 '--rotation-noise=[Rotation noise e_R\: gaussian\:SIGMA (normal, standard deviation SIGMA radians) or uniform (uniform in (-pi, pi\])]:SPEC:_default' \
 '--translation-noise=[Translation noise e_Delta\: gaussian\:SIGMA (normal in each coordinate, standard deviation SIGMA metres) or uniform\:HALFWIDTH (uniform in \[-HALFWIDTH, HALFWIDTH\]^2)]:SPEC:_default' \
@@ -30,7 +34,7 @@ per-pose\:"Each pose j >= 2 with probability P_c closes one loop to an earlier p
 '--output=[Output file, or - for stdout]:OUT:_default' \
 '--to=[Output format \[default\: from the output'\''s extension (.g2o, .graph), else g2o\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
-'(-n --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --side)--corrupt=[Add false loop closures to this graph (- for stdin) instead of generating one (see Outliers below)]:GRAPH:_default' \
+'(--world -n --poses --loop-probability --loop-model --force --rotation-noise --translation-noise --side)--corrupt=[Add false loop closures to this graph (- for stdin) instead of generating one (see Outliers below)]:GRAPH:_default' \
 '--outliers=[Number of outlier groups to add to --corrupt'\''s graph]:N:_default' \
 '--outlier-model=[Which pose pairs outliers join\: random (any two poses) or local (at most 20 ids apart)]:MODEL:((random\:"Any two poses, uniformly"
 local\:"Poses at most 20 ids apart"))' \

@@ -96,7 +96,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let (graph, read_report) = args.input.read_any_shown(&progress)?;
     let graph = match graph {
         io::AnyGraph::Planar(graph) => graph,
-        io::AnyGraph::Spatial(graph) => return run3(args, &graph, &read_report, progress),
+        io::AnyGraph::Spatial(graph) => return run3(args, &graph, &read_report, progress, rec),
     };
     let poses = match &args.estimate {
         None => {
@@ -179,13 +179,8 @@ fn run3(
     graph: &crate::graph3::Graph3,
     read_report: &io::ReadReport,
     progress: super::progress_bar::Progress,
+    rec: crate::viz::Recorder,
 ) -> crate::Result<ExitCode> {
-    let rerun = &args.rerun;
-    if rerun.rerun_save.is_some() || rerun.rerun_connect.is_some() || rerun.rerun_spawn {
-        return Err(Error::Invalid(
-            "--rerun-save, --rerun-connect, --rerun-spawn: 3D graphs are not recorded yet".into(),
-        ));
-    }
     let poses = match &args.estimate {
         None => graph.poses.clone(),
         Some(path) => {
@@ -230,6 +225,11 @@ fn run3(
     let report =
         progress.watch(|| crate::solve::certify_estimate3(graph, &poses, &options, source))?;
     progress.finish();
+    // The estimate certified, as in 2D.
+    rec.graph3(&crate::graph3::Graph3 {
+        poses,
+        ..graph.clone()
+    });
     if args.json {
         let json = JsonReport {
             report: &report,
@@ -239,6 +239,22 @@ fn run3(
     } else {
         eprint!("{}", text_report(args, &report));
     }
+    rec.certificate(&crate::viz::Certificate {
+        cost: report.cost,
+        lower_bound: report.lower_bound,
+        certified: report.certified,
+        // In 3D the kernel of a certified S is 3-dimensional (the estimate's rotations).
+        szep: report
+            .components
+            .iter()
+            .all(|c| c.near_zero_eigenvalues == Some(3)),
+        near_zero: report
+            .components
+            .iter()
+            .filter_map(|c| c.near_zero_eigenvalues)
+            .sum(),
+    });
+    rec.finish()?;
     Ok(if report.certified {
         ExitCode::SUCCESS
     } else {

@@ -374,12 +374,7 @@ fn run3(
     rec: crate::viz::Recorder,
 ) -> crate::Result<ExitCode> {
     progress.suspend(|| crate::cli::print_warnings(&report.warnings));
-    let rerun = &args.rerun;
-    if rerun.rerun_save.is_some() || rerun.rerun_connect.is_some() || rerun.rerun_spawn {
-        return Err(Error::Invalid(
-            "--rerun-save, --rerun-connect, --rerun-spawn: 3D graphs are not recorded yet".into(),
-        ));
-    }
+    rec.graph3(&graph);
     if args.landmarks.is_some() {
         return Err(Error::Invalid(
             "--landmarks: this 3D graph has no landmarks".into(),

@@ -4,6 +4,7 @@ use super::common::RerunArgs;
 use crate::error::Error;
 use crate::io::{self, Format, WriteOptions};
 use crate::robust::outliers::{OutlierConfig, OutlierModel, add_outliers};
+use crate::simulate::space::{SpaceConfig, World3, simulate3};
 use crate::simulate::{
     LandmarkConfig, LoopModel, RotationNoise, SimulationConfig, TranslationNoise, add_landmarks,
     simulate,
@@ -22,6 +23,9 @@ Examples:
   pgo-simulate -n 1000000 --loop-model per-pose --loop-probability 0.05 -o big.g2o
   pgo-simulate -n 100 --loop-probability 0 --landmarks 30 --landmark-range 3 -o slam.g2o
                                                  a pose-landmark world: odometry + landmarks
+  pgo-simulate --world sphere -n 2500 --rotation-noise gaussian:0.05 -o sphere.g2o
+                                                 an SE(3) world: 50 rings of 50 poses
+  pgo-simulate --world grid -n 1000 --loop-probability 0.3 --seed 2 -o grid.g2o
   pgo-simulate --corrupt intel.g2o --outliers 100 --seed 1 -o intel-100.g2o --outlier-list intel-100.txt
   pgo-simulate --corrupt M3500.g2o --outliers 50 --outlier-model local --group 10 -o local.g2o
 
@@ -29,6 +33,19 @@ Size: the paper's model draws a loop closure for every pair of poses, about P_c 
 -n 100000 would make 5e8 edges (about 45 GB of g2o text). Graphs of more than 10^7 expected
 loop closures, or more than 10^10 pairs to draw, are refused with their size unless --force is
 given; --loop-model per-pose grows linearly (about P_c n loop closures).
+
+3D worlds (--world sphere|torus|grid): SE(3) poses written as g2o VERTEX_SE3:QUAT (the ground
+truth) and EDGE_SE3:QUAT. sphere: ceil(sqrt(N)) poses per ring on rings of latitude of a sphere
+of diameter L; torus: rings around the tube of a torus of outer diameter L (radii 3L/8, L/8);
+grid: a cube of ceil(cbrt(N))^3 lattice points (spacing L/side points) walked row by row.
+Loop closures: to the same place on the previous ring (the torus: also last ring to first) or
+to lattice neighbours, each with probability P_c [default 1]. Noise: t = R_i^T (t_j - t_i) +
+e_t, e_t as --translation-noise in 3 coordinates; R = R_i^T R_j Exp(w), w ~ N(0, SIGMA^2 I_3)
+isotropic Gaussian in the tangent space (gaussian:SIGMA), or a rotation uniform on SO(3)
+(uniform). The information matrix is the inverse covariance of the noise drawn, in g2o's
+coordinates (x, y, z, qx, qy, qz): translation I/SIGMA^2 (uniform: 3/H^2 I), rotation
+6 / (1 - (1 - SIGMA^2) exp(-SIGMA^2/2)) I (about 4/SIGMA^2: qv ~ w/2; uniform: 4 I); a
+noiseless part gets the identity.
 
 Outliers (--corrupt GRAPH --outliers N): Vertigo's generator (Suenderhauf and Protzel's robust
 SLAM benchmark). N groups, each a pair of poses v1 < v2 (dense indices, never consecutive;
@@ -49,7 +66,9 @@ one line 'LINE I J' per outlier: its line in the output file and its two ids.";
 /// to (-pi, pi]. Every information matrix is the identity, so unit weights give the paper's cost.
 /// The vertex lines hold the ground truth. The same seed and flags give the same file, byte for
 /// byte; the ground truth depends only on -n, --side and --seed, the edge set also on
-/// --loop-probability. An output file is replaced only once completely written.
+/// --loop-probability. An output file is replaced only once completely written. With --world
+/// sphere, torus or grid: an SE(3) graph on that world, its information matrices the inverse
+/// covariance of the noise drawn (see 3D worlds below).
 #[derive(Debug, Parser)]
 #[command(
     name = "pgo-simulate",
@@ -58,18 +77,24 @@ one line 'LINE I J' per outlier: its line in the output file and its two ids.";
     allow_negative_numbers = true
 )]
 pub struct Args {
+    /// The world: planar (the paper's model (47)), or an SE(3) world written as g2o 3D (see 3D
+    /// worlds below)
+    #[arg(long, value_enum, value_name = "WORLD", default_value = "planar")]
+    pub world: World,
+
     /// Number of poses (ids 0..N-1)
     #[arg(short = 'n', long = "poses", value_name = "N", default_value = "10", value_parser = parse_poses)]
     pub n: usize,
 
     /// Probability P_c of a loop closure between two poses i < j with j > i + 1, each pair
-    /// independently (per pose with --loop-model per-pose)
-    #[arg(long, value_name = "P", default_value = "0.1", value_parser = parse_probability)]
-    pub loop_probability: f64,
+    /// independently (per pose with --loop-model per-pose; in a 3D world each candidate)
+    /// [default: 0.1, 1 in a 3D world]
+    #[arg(long, value_name = "P", value_parser = parse_probability)]
+    pub loop_probability: Option<f64>,
 
-    /// Which loop closures are drawn
-    #[arg(long, value_enum, value_name = "MODEL", default_value = "pairs")]
-    pub loop_model: LoopModel,
+    /// Which loop closures are drawn (planar) [default: pairs]
+    #[arg(long, value_enum, value_name = "MODEL")]
+    pub loop_model: Option<LoopModel>,
 
     /// Generate however many loop closures the pairs model makes (see Size below)
     #[arg(long)]
@@ -117,7 +142,7 @@ pub struct Args {
 
     /// Add false loop closures to this graph (- for stdin) instead of generating one (see
     /// Outliers below)
-    #[arg(long, value_name = "GRAPH", requires = "outliers", conflicts_with_all = ["n", "loop_probability", "loop_model", "force", "rotation_noise", "translation_noise", "side"])]
+    #[arg(long, value_name = "GRAPH", requires = "outliers", conflicts_with_all = ["world", "n", "loop_probability", "loop_model", "force", "rotation_noise", "translation_noise", "side"])]
     pub corrupt: Option<String>,
 
     /// Number of outlier groups to add to --corrupt's graph
@@ -144,6 +169,19 @@ pub struct Args {
 
     #[command(flatten)]
     pub rerun: RerunArgs,
+}
+
+/// `--world`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum World {
+    /// Planar poses by the paper's model (47)
+    Planar,
+    /// SE(3) poses on rings of latitude of a sphere (like sphere2500)
+    Sphere,
+    /// SE(3) poses on rings around a torus (like torus3D)
+    Torus,
+    /// SE(3) poses walking a cubic lattice (like grid3D)
+    Grid,
 }
 
 fn parse_count(s: &str) -> Result<usize, String> {
@@ -210,11 +248,20 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     if let Some(input) = &args.corrupt {
         return corrupt(args, input);
     }
+    let world = match args.world {
+        World::Planar => None,
+        World::Sphere => Some(World3::Sphere),
+        World::Torus => Some(World3::Torus),
+        World::Grid => Some(World3::Grid),
+    };
+    if let Some(world) = world {
+        return run3(args, world);
+    }
     let config = SimulationConfig {
         n: args.n,
         side: args.side,
-        loop_probability: args.loop_probability,
-        loop_model: args.loop_model,
+        loop_probability: args.loop_probability.unwrap_or(0.1),
+        loop_model: args.loop_model.unwrap_or_default(),
         rotation_noise: args.rotation_noise,
         translation_noise: args.translation_noise,
         seed: args.seed,
@@ -273,6 +320,67 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 LoopModel::Pairs => String::new(),
                 model => format!(" ({})", model.name()),
             },
+            config.rotation_noise,
+            config.translation_noise,
+            config.side,
+            if args.output == "-" {
+                "<stdout>"
+            } else {
+                &args.output
+            },
+        );
+    }
+    rec.finish()?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--world sphere|torus|grid`: [`simulate3`], written as g2o 3D.
+fn run3(args: &Args, world: World3) -> crate::Result<ExitCode> {
+    let refused = [
+        (args.loop_model.is_some(), "--loop-model"),
+        (args.landmarks > 0, "--landmarks"),
+        (args.to == Some(Format::Toro), "--to toro"),
+    ];
+    if let Some((_, what)) = refused.iter().find(|(given, _)| *given) {
+        return Err(Error::Invalid(format!(
+            "{what}: not available with --world {} (a 3D world is written as g2o VERTEX_SE3:QUAT/EDGE_SE3:QUAT; its loop closures are the world's candidates, each with --loop-probability)",
+            world.name()
+        )));
+    }
+    if args.to.is_none() && Format::from_extension(&args.output) == Some(Format::Toro) {
+        return Err(Error::Invalid(format!(
+            "{}: a 3D world is written as g2o (quaternions), not TORO; name the output .g2o",
+            args.output
+        )));
+    }
+    let config = SpaceConfig {
+        world,
+        n: args.n,
+        side: args.side,
+        loop_probability: args.loop_probability.unwrap_or(1.0),
+        rotation_noise: args.rotation_noise,
+        translation_noise: args.translation_noise,
+        seed: args.seed,
+    };
+    config.validate()?;
+    io::check_output(&args.output)?;
+    let rec = args.rerun.recorder("pgo-simulate")?;
+    let sim = simulate3(&config);
+    rec.graph3(&sim.graph);
+    io::write3_path(&sim.graph, Format::G2o, &args.output)?;
+    if !args.quiet {
+        let odometry = config.n - 1;
+        let loops = sim.graph.edges.len() - odometry;
+        eprintln!(
+            "pgo-simulate: {} world, {} pose{}, {} edge{} ({odometry} odometry, {loops} loop closure{}); seed {}, loop probability {}, rotation noise {}, translation noise {}, side {} -> {}: format g2o (3D)",
+            world.name(),
+            config.n,
+            if config.n == 1 { "" } else { "s" },
+            sim.graph.edges.len(),
+            if sim.graph.edges.len() == 1 { "" } else { "s" },
+            if loops == 1 { "" } else { "s" },
+            config.seed,
+            config.loop_probability,
             config.rotation_noise,
             config.translation_noise,
             config.side,

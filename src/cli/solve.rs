@@ -356,7 +356,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut graph = match graph {
         io::AnyGraph::Planar(graph) => graph,
         io::AnyGraph::Spatial(graph) => {
-            return run3(args, graph, read_report, read_s, output, progress);
+            return run3(args, graph, read_report, read_s, output, progress, rec);
         }
     };
     rec.graph(&graph);
@@ -509,12 +509,6 @@ fn refuse3(args: &Args) -> crate::Result<()> {
             args.method == Method::Sdp,
             "--method sdp (the dual SDP of Algorithm 1 is planar)",
         ),
-        (
-            args.rerun.rerun_save.is_some()
-                || args.rerun.rerun_connect.is_some()
-                || args.rerun.rerun_spawn,
-            "--rerun-save, --rerun-connect, --rerun-spawn (3D graphs are not recorded yet)",
-        ),
     ];
     match refused.iter().find(|(given, _)| *given) {
         Some((_, what)) => Err(Error::Invalid(format!(
@@ -547,8 +541,10 @@ fn run3(
     read_s: f64,
     output: Option<&str>,
     progress: super::progress_bar::Progress,
+    rec: crate::viz::Recorder,
 ) -> crate::Result<ExitCode> {
     refuse3(args)?;
+    rec.graph3(&graph);
     let options = SolveOptions {
         method: args.method,
         solver: args.solver.unwrap_or(SdpSolver::Ipm),
@@ -559,9 +555,20 @@ fn run3(
         staircase_budget: args.staircase_budget * 1e9,
     };
     let t1 = Instant::now();
-    let solution = progress.watch(|| crate::solve::solve3(&graph, &options))?;
+    let solution = progress.watch(|| rec.observe(|| crate::solve::solve3(&graph, &options)))?;
     let solve_s = t1.elapsed().as_secs_f64();
     graph.poses.clone_from(&solution.estimate);
+    rec.optimized3(
+        &graph,
+        options.weights == crate::problem::weights::Weights::Unit,
+    );
+    rec.certificate(&crate::viz::Certificate {
+        cost: solution.cost,
+        lower_bound: solution.lower_bound,
+        certified: solution.certified,
+        szep: solution.szep,
+        near_zero: solution.near_zero_eigenvalues,
+    });
     let t2 = Instant::now();
     let written = match output {
         Some(path) => {
@@ -608,6 +615,7 @@ fn run3(
         eprint!("{}", text_report3(&args.input.input, &report));
     }
     written?;
+    rec.finish()?;
     Ok(if args.fail_uncertified && !solution.certified {
         ExitCode::from(1)
     } else {

@@ -26,6 +26,7 @@ pub mod certificate;
 pub mod local;
 pub mod problem;
 pub mod rounding;
+pub mod sdp;
 pub mod stiefel;
 
 use crate::graph3::Graph3;

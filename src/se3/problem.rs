@@ -77,6 +77,24 @@ pub fn weights3(graph: &Graph3, unit: bool) -> Result<Vec<Weight3>, Error> {
         .collect()
 }
 
+/// One edge's term of f (eq. (1) above) at poses given as read:
+/// τ‖t_j − t_i − R_i t̃‖² + κ‖R_j − R_i R̃‖_F², evaluated directly with nalgebra (the viewer's
+/// residual colours; the solver's cost is [`Problem3::cost`]).
+pub fn edge_term(e: &crate::graph3::Edge3, w: Weight3, poses: &[crate::graph3::Pose3]) -> f64 {
+    let (a, b) = (poses[e.i].to_isometry(), poses[e.j].to_isometry());
+    let ra = a.rotation.to_rotation_matrix();
+    let rb = b.rotation.to_rotation_matrix();
+    let rz = e
+        .measurement
+        .rotation
+        .unit_quaternion()
+        .to_rotation_matrix();
+    let tz = nalgebra::Vector3::from(e.measurement.translation);
+    let dt = b.translation.vector - a.translation.vector - ra * tz;
+    let dr = rb.matrix() - ra.matrix() * rz.matrix();
+    w.tau * dt.norm_squared() + w.kappa * dr.norm_squared()
+}
+
 /// One edge's term: τ‖t_j − t_i − Y_i t̃‖² + κ‖Y_j − Y_i R̃‖_F².
 #[derive(Debug, Clone, Copy)]
 pub struct Term3 {

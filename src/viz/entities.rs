@@ -8,6 +8,7 @@ use super::{
     POSE_COLOR, REJECTED_COLOR, RESIDUAL_LINE_RADIUS, RESIDUAL_SCALE, Rgb, Spectrum, When,
 };
 use crate::graph::PoseGraph;
+use crate::graph3::Graph3;
 
 /// Formats a number for the text entries: shortest round-trip form.
 fn num(v: f64) -> String {
@@ -234,16 +235,7 @@ fn colored_strips(
     residuals: Vec<f64>,
     ends: [(&'static str, Vec<f64>); 2],
 ) -> Entity {
-    let max = residuals.iter().copied().fold(0.0, f64::max);
-    let min_positive = residuals
-        .iter()
-        .copied()
-        .filter(|r| *r > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    let colors = residuals
-        .iter()
-        .map(|&r| scale_color(residual_position(r, min_positive, max)))
-        .collect();
+    let colors = residual_colors(&residuals);
     let [(a, from), (b, to)] = ends;
     Entity::fixed(
         path,
@@ -256,6 +248,176 @@ fn colored_strips(
     .with(a, from)
     .with(b, to)
     .with("residual", residuals)
+}
+
+/// The color of each residual on the scale of [`residual_entity`]: logarithmic between the
+/// smallest positive residual and the largest ([`residual_position`], [`scale_color`]).
+pub fn residual_colors(residuals: &[f64]) -> Vec<Rgb> {
+    let max = residuals.iter().copied().fold(0.0, f64::max);
+    let min_positive = residuals
+        .iter()
+        .copied()
+        .filter(|r| *r > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    residuals
+        .iter()
+        .map(|&r| scale_color(residual_position(r, min_positive, max)))
+        .collect()
+}
+
+fn point3(t: [f64; 3]) -> [f32; 3] {
+    t.map(|v| v as f32)
+}
+
+/// Whether a 3D edge counts as odometry: consecutive ids, as in 2D.
+pub fn is_odometry3(graph: &Graph3, e: &crate::graph3::Edge3) -> bool {
+    graph.ids[e.i].abs_diff(graph.ids[e.j]) == 1
+}
+
+/// The entities of a 3D graph under `root`, the planar ones' counterparts: `poses`
+/// (Points3D, exact values `pose_id`, `x`, `y`, `z` and the rotation as the unit quaternion
+/// `qx`, `qy`, `qz`, `qw`), `headings` (each pose's x axis R_i e_x as an arrow, half the median
+/// measured translation long), `odometry` and `loop_closures` (2-point strips with `from`,
+/// `to`).
+pub fn graph3_entities(root: &str, graph: &Graph3) -> Vec<Entity> {
+    let positions: Vec<[f32; 3]> = graph.poses.iter().map(|p| point3(p.translation)).collect();
+    let mut lengths: Vec<f64> = graph
+        .edges
+        .iter()
+        .map(|e| {
+            let [x, y, z] = e.measurement.translation;
+            (x * x + y * y + z * z).sqrt()
+        })
+        .filter(|l| l.is_finite() && *l > 0.0)
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let length = lengths.get(lengths.len() / 2).map_or(1.0, |l| 0.5 * l);
+    let rotations: Vec<_> = graph
+        .poses
+        .iter()
+        .map(|p| p.rotation.unit_quaternion())
+        .collect();
+    let vectors = rotations
+        .iter()
+        .map(|q| {
+            let x = q * nalgebra::Vector3::x();
+            point3([length * x.x, length * x.y, length * x.z])
+        })
+        .collect();
+    let column = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..graph.num_poses()).map(f).collect() };
+    let quaternion = |k: usize| {
+        let q = rotations[k].quaternion();
+        [q.i, q.j, q.k, q.w]
+    };
+    let mut entities = vec![
+        Entity::fixed(
+            format!("{root}/poses"),
+            Item::Points3 {
+                positions: positions.clone(),
+                color: POSE_COLOR,
+                radius: POINT_RADIUS,
+            },
+        )
+        .with(
+            "pose_id",
+            graph.ids.iter().map(|&id| f64::from(id)).collect(),
+        )
+        .with("x", column(&|k| graph.poses[k].translation[0]))
+        .with("y", column(&|k| graph.poses[k].translation[1]))
+        .with("z", column(&|k| graph.poses[k].translation[2]))
+        .with("qx", column(&|k| quaternion(k)[0]))
+        .with("qy", column(&|k| quaternion(k)[1]))
+        .with("qz", column(&|k| quaternion(k)[2]))
+        .with("qw", column(&|k| quaternion(k)[3])),
+        Entity::fixed(
+            format!("{root}/headings"),
+            Item::Arrows3 {
+                origins: positions,
+                vectors,
+                color: HEADING_COLOR,
+                radius: LINE_RADIUS,
+            },
+        ),
+    ];
+    for (name, odometry, color) in [
+        ("odometry", true, ODOMETRY_COLOR),
+        ("loop_closures", false, LOOP_CLOSURE_COLOR),
+    ] {
+        let (strips, from, to) = edge_strips3(graph, |e| is_odometry3(graph, e) == odometry);
+        entities.push(
+            Entity::fixed(
+                format!("{root}/{name}"),
+                Item::Strips3 {
+                    strips,
+                    colors: vec![color],
+                    radius: LINE_RADIUS,
+                },
+            )
+            .with("from", from)
+            .with("to", to),
+        );
+    }
+    entities
+}
+
+/// The strip of each kept 3D edge between its poses' positions, with the ids of its ends.
+fn edge_strips3(
+    graph: &Graph3,
+    keep: impl Fn(&crate::graph3::Edge3) -> bool,
+) -> (Vec<[[f32; 3]; 2]>, Vec<f64>, Vec<f64>) {
+    let mut strips = Vec::new();
+    let (mut from, mut to) = (Vec::new(), Vec::new());
+    for e in graph.edges.iter().filter(|e| keep(e)) {
+        strips.push([
+            point3(graph.poses[e.i].translation),
+            point3(graph.poses[e.j].translation),
+        ]);
+        from.push(f64::from(graph.ids[e.i]));
+        to.push(f64::from(graph.ids[e.j]));
+    }
+    (strips, from, to)
+}
+
+/// Every edge of a 3D graph, in input order, colored by its term of SE-Sync's f
+/// ([`crate::se3::problem::edge_term`]) on the planar scale ([`residual_colors`]).
+pub fn residual3_entity(
+    path: &str,
+    graph: &Graph3,
+    weights: &[crate::se3::problem::Weight3],
+) -> Entity {
+    let residuals: Vec<f64> = graph
+        .edges
+        .iter()
+        .zip(weights)
+        .map(|(e, w)| crate::se3::problem::edge_term(e, *w, &graph.poses))
+        .collect();
+    let (strips, from, to) = edge_strips3(graph, |_| true);
+    Entity::fixed(
+        path,
+        Item::Strips3 {
+            colors: residual_colors(&residuals),
+            strips,
+            radius: RESIDUAL_LINE_RADIUS,
+        },
+    )
+    .with("from", from)
+    .with("to", to)
+    .with("residual", residuals)
+}
+
+/// "N poses, M edges (K odometry, L loop closures), 3D".
+pub fn graph3_summary(graph: &Graph3) -> String {
+    let odometry = graph
+        .edges
+        .iter()
+        .filter(|e| is_odometry3(graph, e))
+        .count();
+    format!(
+        "{} poses, {} edges ({odometry} odometry, {} loop closures), 3D",
+        graph.num_poses(),
+        graph.edges.len(),
+        graph.edges.len() - odometry,
+    )
 }
 
 /// "N poses, M edges (K odometry, L loop closures)".

@@ -17,9 +17,10 @@
 //! | `graph/headings` | Arrows2D | each pose's heading |
 //! | `graph/odometry` | LineStrips2D | edges with \|id_i − id_j\| = 1, one 2-point strip each; their ids in `from`, `to` |
 //! | `graph/loop_closures` | LineStrips2D | the other edges, in another color |
+//! | `graph/poses`, `graph/headings`, `graph/odometry`, `graph/loop_closures` of a 3D graph | Points3D, Arrows3D (each pose's x axis), LineStrips3D | the same in 3D; exact values `pose_id`, `x`, `y`, `z`, `qx`, `qy`, `qz`, `qw` |
 //! | `graph/landmarks`, `graph/observations` | Points2D, LineStrips2D | landmarks and the rays of their observations |
 //! | `optimized/...` | the same | the optimized estimate (`pgo-solve`), beside the input |
-//! | `optimized/residuals` | LineStrips2D | every edge colored by its term of the cost f (log scale, blue to red); the terms in `residual` |
+//! | `optimized/residuals` | LineStrips2D (LineStrips3D) | every edge colored by its term of the cost f (log scale, blue to red); the terms in `residual` |
 //! | `optimized/landmark_residuals` | LineStrips2D | observation rays colored by their terms of f |
 //! | `optimized/rejected` | LineStrips2D | `--robust`: the edges GNC rejected, red; r_e² in `residual` |
 //! | `robust/weights` | LineStrips2D | `--robust`: every edge colored by its GNC weight (red 0 to blue 1) at each step of the timeline `gnc_iteration`; the weights in `weight` |
@@ -29,6 +30,7 @@
 //! | `report/graph`, `report/spectrum`, `report/certificate` | TextLog | one-line summaries; the certificate's numbers also as components |
 
 use crate::graph::PoseGraph;
+use crate::graph3::Graph3;
 use crate::problem::weights::{Weights, edge_weights};
 use std::cell::Cell;
 use std::rc::Rc;
@@ -105,6 +107,23 @@ pub enum Item {
     /// Two-point strips; one color for all, or one per strip.
     Strips {
         strips: Vec<[[f32; 2]; 2]>,
+        colors: Vec<Rgb>,
+        radius: f32,
+    },
+    /// The 3D counterparts (3D graphs, issue 15): rerun's Points3D, Arrows3D, LineStrips3D.
+    Points3 {
+        positions: Vec<[f32; 3]>,
+        color: Rgb,
+        radius: f32,
+    },
+    Arrows3 {
+        origins: Vec<[f32; 3]>,
+        vectors: Vec<[f32; 3]>,
+        color: Rgb,
+        radius: f32,
+    },
+    Strips3 {
+        strips: Vec<[[f32; 3]; 2]>,
         colors: Vec<Rgb>,
         radius: f32,
     },
@@ -248,6 +267,33 @@ impl Recorder {
                         &weights,
                     ));
                 }
+            }
+            v
+        });
+    }
+
+    /// A 3D graph as read (or generated): `graph/...` (3D entities) and `report/graph`.
+    pub fn graph3(&self, graph: &Graph3) {
+        self.emit(|| {
+            let mut v = graph3_entities("graph", graph);
+            v.push(Entity::fixed(
+                "report/graph",
+                Item::Text {
+                    text: graph3_summary(graph),
+                    warning: false,
+                },
+            ));
+            v
+        });
+    }
+
+    /// A 3D estimate (`optimized/...`) and its residuals: each edge's term of SE-Sync's f
+    /// under its weights (`unit`: τ = κ = 1).
+    pub fn optimized3(&self, graph: &Graph3, unit: bool) {
+        self.emit(|| {
+            let mut v = graph3_entities("optimized", graph);
+            if let Ok(weights) = crate::se3::problem::weights3(graph, unit) {
+                v.push(residual3_entity("optimized/residuals", graph, &weights));
             }
             v
         });
@@ -558,5 +604,53 @@ mod tests {
         r.graph(&square());
         assert_eq!(r.observe(|| 5), 5);
         r.finish().unwrap();
+    }
+
+    /// 3D graphs: one point and arrow per pose, edges split as in 2D, and the residuals the
+    /// terms of f, summing to the solver's cost tr(XᵀQX) of the same poses (Q assembled in
+    /// se3::problem, the terms here evaluated directly).
+    #[test]
+    fn graph3_entities_and_residuals_sum_to_the_cost() {
+        use crate::simulate::space::{SpaceConfig, World3, simulate3};
+        use crate::simulate::{RotationNoise, TranslationNoise};
+        let sim = simulate3(&SpaceConfig {
+            world: World3::Torus,
+            n: 25,
+            side: 10.0,
+            loop_probability: 1.0,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.2 },
+            seed: 1,
+        });
+        let g = &sim.graph;
+        let v = graph3_entities("graph", g);
+        let Item::Points3 { positions, .. } = &v[0].item else {
+            panic!("poses")
+        };
+        assert_eq!(positions.len(), 25);
+        let Item::Arrows3 { vectors, .. } = &v[1].item else {
+            panic!("headings")
+        };
+        assert_eq!(vectors.len(), 25);
+        let count = |k: usize| match &v[k].item {
+            Item::Strips3 { strips, .. } => strips.len(),
+            _ => panic!("strips"),
+        };
+        assert_eq!(count(2), 24, "the odometry path");
+        assert_eq!(count(2) + count(3), g.edges.len());
+        let w = crate::se3::problem::weights3(g, false).unwrap();
+        let e = residual3_entity("optimized/residuals", g, &w);
+        let total: f64 = e
+            .values
+            .iter()
+            .find(|(n, _)| *n == "residual")
+            .unwrap()
+            .1
+            .iter()
+            .sum();
+        let problem = crate::se3::problem::Problem3::new(g, &w, 0);
+        let truth: Vec<_> = g.poses.iter().map(crate::se3::rt_of).collect();
+        let cost = problem.cost(&crate::se3::rounding::point_of(&problem, &truth));
+        assert!((total - cost).abs() <= 1e-9 * cost, "{total} vs {cost}");
     }
 }

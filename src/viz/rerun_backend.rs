@@ -30,6 +30,8 @@ pub struct Sink {
     error: Rc<RefCell<Option<String>>>,
     /// Entity paths logged (for the blueprint).
     paths: Rc<RefCell<BTreeSet<String>>>,
+    /// Whether 3D entities were logged (a 3D graph): the blueprint's views are then 3D.
+    spatial3: Rc<Cell<bool>>,
 }
 
 fn invalid(message: String) -> Error {
@@ -114,6 +116,7 @@ impl Inner {
                 rec,
                 error: Rc::default(),
                 paths: Rc::default(),
+                spatial3: Rc::default(),
             },
             save,
             viewers: viewers.into_iter().map(|(url, _)| url).collect(),
@@ -145,7 +148,7 @@ impl Inner {
             viewers,
             _listed,
         } = self;
-        if let Err(e) = blueprint(&sink.paths.borrow()).send(
+        if let Err(e) = blueprint(&sink.paths.borrow(), sink.spatial3.get()).send(
             &sink.rec,
             rerun::blueprint::BlueprintActivation {
                 make_active: true,
@@ -262,35 +265,46 @@ fn write_file(path: &str, tmp: tempfile::NamedTempFile, bytes: &[u8]) -> crate::
     Ok(())
 }
 
-/// The viewer layout: the 2D views of what was logged on top (input, optimized, residuals),
-/// the solver's iterations, the spectra and the reports below.
-fn blueprint(paths: &BTreeSet<String>) -> rerun::blueprint::Blueprint {
+/// The viewer layout: the spatial views of what was logged on top (input, optimized,
+/// residuals; 2D, or 3D for a 3D graph), the solver's iterations, the spectra and the reports
+/// below.
+fn blueprint(paths: &BTreeSet<String>, spatial3: bool) -> rerun::blueprint::Blueprint {
     use rerun::blueprint::{
         BarChartView, Blueprint, BlueprintPanel, ContainerLike, Grid, Horizontal, SelectionPanel,
-        Spatial2DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
+        Spatial2DView, Spatial3DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
     };
     let has = |prefix: &str| paths.iter().any(|p| p.starts_with(prefix));
+    // A spatial view: 3D when the graph is.
+    let view = |name: &str, origin: &str, contents: Option<&[&str]>| -> ContainerLike {
+        if spatial3 {
+            let v = Spatial3DView::new(name).with_origin(origin);
+            match contents {
+                Some(c) => v.with_contents(c.iter().copied()).into(),
+                None => v.into(),
+            }
+        } else {
+            let v = Spatial2DView::new(name).with_origin(origin);
+            match contents {
+                Some(c) => v.with_contents(c.iter().copied()).into(),
+                None => v.into(),
+            }
+        }
+    };
     let mut top: Vec<ContainerLike> = Vec::new();
     if has("graph/") {
-        top.push(
-            Spatial2DView::new("graph as read")
-                .with_origin("/graph")
-                .into(),
-        );
+        top.push(view("graph as read", "/graph", None));
     }
     if has("optimized/") {
-        top.push(
-            Spatial2DView::new("optimized")
-                .with_origin("/optimized")
-                .with_contents(["+ $origin/**", "- /optimized/residuals"])
-                .into(),
-        );
-        top.push(
-            Spatial2DView::new("residuals (cost terms, log scale)")
-                .with_origin("/optimized")
-                .with_contents(["+ /optimized/residuals"])
-                .into(),
-        );
+        top.push(view(
+            "optimized",
+            "/optimized",
+            Some(&["+ $origin/**", "- /optimized/residuals"]),
+        ));
+        top.push(view(
+            "residuals (cost terms, log scale)",
+            "/optimized",
+            Some(&["+ /optimized/residuals"]),
+        ));
     }
     if has("robust/") {
         top.push(
@@ -377,6 +391,12 @@ impl Sink {
             }
         };
         let path = entity.path.as_str();
+        if matches!(
+            entity.item,
+            Item::Points3 { .. } | Item::Arrows3 { .. } | Item::Strips3 { .. }
+        ) {
+            self.spatial3.set(true);
+        }
         let result = match &entity.item {
             Item::Points {
                 positions,
@@ -410,6 +430,41 @@ impl Sink {
                 path,
                 is_static,
                 &rerun::LineStrips2D::new(strips.iter().copied())
+                    .with_colors(colors.iter().map(|c| rgb(*c)))
+                    .with_radii([rerun::Radius::new_ui_points(*radius)]),
+            ),
+            Item::Points3 {
+                positions,
+                color,
+                radius,
+            } => self.log(
+                path,
+                is_static,
+                &rerun::Points3D::new(positions.iter().copied())
+                    .with_colors([rgb(*color)])
+                    .with_radii([rerun::Radius::new_ui_points(*radius)]),
+            ),
+            Item::Arrows3 {
+                origins,
+                vectors,
+                color,
+                radius,
+            } => self.log(
+                path,
+                is_static,
+                &rerun::Arrows3D::from_vectors(vectors.iter().copied())
+                    .with_origins(origins.iter().copied())
+                    .with_colors([rgb(*color)])
+                    .with_radii([rerun::Radius::new_ui_points(*radius)]),
+            ),
+            Item::Strips3 {
+                strips,
+                colors,
+                radius,
+            } => self.log(
+                path,
+                is_static,
+                &rerun::LineStrips3D::new(strips.iter().copied())
                     .with_colors(colors.iter().map(|c| rgb(*c)))
                     .with_radii([rerun::Radius::new_ui_points(*radius)]),
             ),

@@ -557,3 +557,182 @@ def test_robust_records_rejected_edges_and_gnc_weights(datasets_dir, tmp_path):
             assert rgba == ODOMETRY_RGBA
         elif w == 0.0:
             assert rgba == REJECTED_RGBA
+
+
+# ---------------------------------------------------------------------------------------------
+# 3D graphs (issue 15): the same entities as Points3D, Arrows3D, LineStrips3D
+# ---------------------------------------------------------------------------------------------
+
+
+def read_g2o_3d(path: Path):
+    """VERTEX_SE3:QUAT and EDGE_SE3:QUAT lines, plainly: ({id: (t, q)}, [(i, j, t, q, info21)]),
+    q = (qx, qy, qz, qw) as written."""
+    vertices, edges = {}, []
+    for line in Path(path).read_text().splitlines():
+        f = line.split()
+        if not f:
+            continue
+        if f[0] == "VERTEX_SE3:QUAT":
+            v = list(map(float, f[2:9]))
+            vertices[int(f[1])] = (np.array(v[:3]), np.array(v[3:]))
+        elif f[0] == "EDGE_SE3:QUAT":
+            v = list(map(float, f[3:31]))
+            edges.append((int(f[1]), int(f[2]), np.array(v[:3]), np.array(v[3:7]), v[7:]))
+    return vertices, edges
+
+
+def rotation(q) -> np.ndarray:
+    """The rotation matrix of the quaternion (qx, qy, qz, qw), normalized (Hamilton)."""
+    x, y, z, w = np.asarray(q) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def full6(upper):
+    m = np.zeros((6, 6))
+    k = 0
+    for r in range(6):
+        for c in range(r, 6):
+            m[r, c] = m[c, r] = upper[k]
+            k += 1
+    return m
+
+
+def edge_terms_3d(vertices, edges, weights: str):
+    """SE-Sync's f term by term: tau |t_j - t_i - R_i t~|^2 + kappa |R_j - R_i R~|_F^2 with
+    tau = 3 / tr(inv(Omega_tt)), kappa = 3 / (2 tr(inv(Omega_RR))) (SE-Sync's reader)."""
+    terms = []
+    for i, j, t, q, info in edges:
+        if weights == "unit":
+            tau, kappa = 1.0, 1.0
+        else:
+            m = full6(info)
+            tau = 3.0 / np.trace(np.linalg.inv(m[:3, :3]))
+            kappa = 3.0 / (2.0 * np.trace(np.linalg.inv(m[3:, 3:])))
+        (ti, qi), (tj, qj) = vertices[i], vertices[j]
+        ri, rj = rotation(qi), rotation(qj)
+        terms.append(tau * np.sum((tj - ti - ri @ t) ** 2) + kappa * np.sum((rj - ri @ rotation(q)) ** 2))
+    return terms
+
+
+def check_graph_3d(rec: Recording, root: str, vertices, edges):
+    poses = rec.static[f"/{root}/poses"]
+    ids = [int(i) for i in poses["pose_id"]]
+    assert sorted(ids) == sorted(vertices)
+    assert len(poses["Points3D:positions"]) == len(vertices)
+    for k, pid in enumerate(ids):
+        t, q = vertices[pid]
+        assert [poses["x"][k], poses["y"][k], poses["z"][k]] == list(t)  # exact f64
+        assert poses["Points3D:positions"][k] == [f32(v) for v in t]
+        u = q / np.linalg.norm(q)
+        got = np.array([poses["qx"][k], poses["qy"][k], poses["qz"][k], poses["qw"][k]])
+        assert min(np.abs(got - u).max(), np.abs(got + u).max()) < 1e-12
+    arrows = rec.static[f"/{root}/headings"]
+    assert arrows["Arrows3D:origins"] == poses["Points3D:positions"]
+    for k, pid in enumerate(ids):
+        # Each arrow along the pose's x axis.
+        v = np.array(arrows["Arrows3D:vectors"][k])
+        x_axis = rotation(vertices[pid][1])[:, 0]
+        assert v @ x_axis == pytest.approx(np.linalg.norm(v), rel=1e-5)
+    odometry = [e for e in edges if abs(e[0] - e[1]) == 1]
+    loops = [e for e in edges if abs(e[0] - e[1]) != 1]
+    for name, want, rgba in [("odometry", odometry, ODOMETRY_RGBA), ("loop_closures", loops, LOOP_CLOSURE_RGBA)]:
+        entity = rec.static[f"/{root}/{name}"]
+        strips = entity.get("LineStrips3D:strips", [])
+        assert len(strips) == len(want), f"{root}/{name}: one strip per edge"
+        assert [(int(a), int(b)) for a, b in zip(entity["from"], entity["to"])] == [(e[0], e[1]) for e in want]
+        for strip, (i, j, *_) in zip(strips, want):
+            assert strip == [[f32(v) for v in vertices[i][0]], [f32(v) for v in vertices[j][0]]]
+        if want:
+            assert entity["LineStrips3D:colors"] == [rgba]
+
+
+@pytest.mark.parametrize("weights", ["isotropic", "unit"])
+def test_solve_records_a_3d_graph(weights, tmp_path):
+    src = tmp_path / "sphere.g2o"
+    run("pgo-simulate", ["--world", "sphere", "-n", "49", "--seed", "4", "--rotation-noise", "gaussian:0.05", "-q", "-o", src], tmp_path)
+    args = [src, "--weights", weights, "--json", "--no-timings"]
+    plain = run("pgo-solve", [*args, "-o", "plain.g2o"], tmp_path, check=False)
+    recorded = run("pgo-solve", [*args, "-o", "rec.g2o", "--rerun-save", "s.rrd"], tmp_path, check=False)
+    assert plain.returncode == recorded.returncode == 0
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    assert (tmp_path / "rec.g2o").read_bytes() == (tmp_path / "plain.g2o").read_bytes()
+    report = json.loads(plain.stdout)
+    assert report["certified"]
+    verify(tmp_path / "s.rrd")
+    rec = Recording(tmp_path / "s.rrd")
+    assert rec.application_id == "pgo-solve"
+    spatial = {f"/{root}/{n}" for root in ("graph", "optimized") for n in ("poses", "headings", "odometry", "loop_closures")}
+    assert spatial | {"/optimized/residuals", "/report/graph", "/report/certificate"} <= rec.paths()
+    assert all(p.startswith("/solver/") for p in rec.paths() - spatial - {"/optimized/residuals", "/report/graph", "/report/certificate"})
+    vertices, edges = read_g2o_3d(src)
+    check_graph_3d(rec, "graph", vertices, edges)
+    optimized, out_edges = read_g2o_3d(tmp_path / "rec.g2o")
+    check_graph_3d(rec, "optimized", optimized, out_edges)
+    (summary,) = rec.values("/report/graph", "TextLog:text")
+    assert summary.startswith(f"{len(vertices)} poses, {len(edges)} edges")
+
+    residuals = rec.static["/optimized/residuals"]
+    want = edge_terms_3d(optimized, out_edges, weights)
+    assert len(residuals["LineStrips3D:strips"]) == len(out_edges)
+    assert [(int(a), int(b)) for a, b in zip(residuals["from"], residuals["to"])] == [(e[0], e[1]) for e in out_edges]
+    assert residuals["residual"] == pytest.approx(want, rel=1e-6, abs=1e-9 * max(1.0, report["cost"]))
+    assert sum(residuals["residual"]) == pytest.approx(report["cost"], rel=1e-6)
+    colors = residuals["LineStrips3D:colors"]
+    assert colors[int(np.argmax(want))] == RESIDUAL_LARGEST_RGBA
+    assert colors[int(np.argmin(want))] == RESIDUAL_SMALLEST_RGBA
+
+    cert = rec.static["/report/certificate"]
+    assert cert["cost"] == [report["cost"]]
+    assert cert["lower_bound"] == [report["lower_bound"]]
+    assert cert["certified"] == [1.0]
+    assert cert["TextLog:text"][0].startswith("certified optimal")
+
+
+def test_simulate_records_a_3d_world(tmp_path):
+    args = ["--world", "torus", "-n", "36", "--seed", "2", "--loop-probability", "0.5"]
+    plain = run("pgo-simulate", [*args, "-o", "plain.g2o"], tmp_path)
+    recorded = run("pgo-simulate", [*args, "-o", "rec.g2o", "--rerun-save", "m.rrd"], tmp_path)
+    assert (tmp_path / "rec.g2o").read_bytes() == (tmp_path / "plain.g2o").read_bytes()
+    assert recorded.stderr.replace(b"rec.g2o", b"plain.g2o") == plain.stderr
+    verify(tmp_path / "m.rrd")
+    rec = Recording(tmp_path / "m.rrd")
+    assert rec.application_id == "pgo-simulate"
+    assert rec.paths() == {*(f"/graph/{n}" for n in ("poses", "headings", "odometry", "loop_closures")), "/report/graph"}
+    vertices, edges = read_g2o_3d(tmp_path / "rec.g2o")
+    assert len(vertices) == 36
+    check_graph_3d(rec, "graph", vertices, edges)
+    assert len(rec.values("/graph/odometry", "LineStrips3D:strips")) == 35  # the path
+
+
+def test_convert_and_certify_record_a_3d_graph(tmp_path):
+    src = tmp_path / "grid.g2o"
+    run("pgo-simulate", ["--world", "grid", "-n", "27", "--seed", "1", "-q", "-o", src], tmp_path)
+    vertices, edges = read_g2o_3d(src)
+    plain = run("pgo-convert", ["--stats", src], tmp_path)
+    recorded = run("pgo-convert", ["--stats", src, "--rerun-save", "c.rrd"], tmp_path)
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    verify(tmp_path / "c.rrd")
+    rec = Recording(tmp_path / "c.rrd")
+    assert rec.paths() == {*(f"/graph/{n}" for n in ("poses", "headings", "odometry", "loop_closures")), "/report/graph"}
+    check_graph_3d(rec, "graph", vertices, edges)
+    # pgo-certify on the ground truth (not optimal under noise: exit 1): the estimate recorded
+    # and the report's numbers.
+    plain = run("pgo-certify", [src, "--json"], tmp_path, check=False)
+    recorded = run("pgo-certify", [src, "--json", "--rerun-save", "v.rrd"], tmp_path, check=False)
+    assert plain.returncode == recorded.returncode == 1
+    assert (recorded.stdout, recorded.stderr) == (plain.stdout, plain.stderr)
+    report = json.loads(plain.stdout)
+    verify(tmp_path / "v.rrd")
+    rec = Recording(tmp_path / "v.rrd")
+    assert rec.application_id == "pgo-certify"
+    check_graph_3d(rec, "graph", vertices, edges)
+    cert = rec.static["/report/certificate"]
+    assert cert["cost"] == [report["cost"]]
+    assert cert["lower_bound"] == [report["lower_bound"]]
+    assert cert["certified"] == [0.0]
