@@ -111,7 +111,7 @@ fn dense_s(q: &DMatrix<f64>, x: &DMatrix<f64>, n: usize) -> DMatrix<f64> {
         let r0 = n - 1 + 3 * i;
         let gi = g.rows(r0, 3);
         let xi = x.rows(r0, 3);
-        let l = &gi * xi.transpose();
+        let l = gi * xi.transpose();
         let l = (&l + l.transpose()) * 0.5;
         for a in 0..3 {
             for b in 0..3 {

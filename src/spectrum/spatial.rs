@@ -317,8 +317,8 @@ fn edge_form3(problem: &Problem3, lambda: Option<&[[[f64; 3]; 3]]>, z: &Mat<c64>
         for c in 0..b {
             for a in 0..b {
                 let mut v = et[a].conj() * et[c] * t.tau;
-                for bb in 0..3 {
-                    v += er[a][bb].conj() * er[c][bb] * t.kappa;
+                for (ea, ec) in er[a].iter().zip(&er[c]) {
+                    v += ea.conj() * ec * t.kappa;
                 }
                 h[(a, c)] += v;
             }
