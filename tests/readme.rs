@@ -543,6 +543,20 @@ fn json_reports_are_documented() {
     )
     .unwrap();
     let landmarks = landmarks.to_str().unwrap();
+    // A 3D triangle whose measurements do not quite close, for pgo-spectrum's 3D report.
+    let three_d = dir.path().join("three_d.g2o");
+    let info = "1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1";
+    std::fs::write(
+        &three_d,
+        format!(
+            "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\nVERTEX_SE3:QUAT 2 1 1 0 0 0 0 1\n\
+             EDGE_SE3:QUAT 0 1 1 0 0 0 0 0.1 1 {info}\n\
+             EDGE_SE3:QUAT 1 2 0 1 0.1 0 0 0 1 {info}\n\
+             EDGE_SE3:QUAT 2 0 -1 -1 0 0.1 0 0 1 {info}\n"
+        ),
+    )
+    .unwrap();
+    let three_d = three_d.to_str().unwrap();
     // MIT with 5 false loop closures, for --robust.
     let corrupted = dir.path().join("corrupted.g2o");
     let out = Command::new(bin_dir().join("pgo-simulate"))
@@ -595,6 +609,7 @@ fn json_reports_are_documented() {
                 (warning, "-k 3"),
                 (toy, "--weights unit"),
                 (landmarks, ""),
+                (three_d, "-k 3"),
             ],
         ),
         (

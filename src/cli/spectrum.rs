@@ -1,10 +1,14 @@
 //! `pgo-spectrum`: eigenvalues of the pose graph matrix W, of the penalized matrix W(lambda*)
-//! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6.
+//! and of the rotation-only matrix M; the SZEP; the tree and balanced flags of Prop. 6. For 3D
+//! graphs, those of SE-Sync's data matrix Q, of the certificate matrix S and of M
+//! ([`crate::spectrum::spatial`]).
 
 use super::common::{InputArgs, RerunArgs, WeightArgs, num, to_json_line, write_stdout};
 use super::progress_bar::ProgressArgs;
 use crate::dual::solver::SdpSolver;
-use crate::spectrum::{Spectrum as Report, SpectrumOptions, spectrum};
+use crate::error::Error;
+use crate::io;
+use crate::spectrum::{Spectrum as Report, Spectrum3, SpectrumOptions, spectrum, spectrum3};
 use clap::Parser;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -12,7 +16,8 @@ use std::process::ExitCode;
 const EXAMPLES: &str = "\
 Examples:
   pgo-spectrum datasets/paper_toy.g2o --weights unit
-  pgo-spectrum MIT.g2o -k 6 --json | jq '.penalized_eigenvalues'";
+  pgo-spectrum MIT.g2o -k 6 --json | jq '.penalized_eigenvalues'
+  pgo-spectrum sphere2500.g2o -k 6     # 3D: Q, S, M; 3 zeros of S";
 
 /// Eigenvalues of the pose graph matrices and the single zero eigenvalue property (SZEP).
 ///
@@ -35,6 +40,18 @@ Examples:
 /// proves the estimate optimal with the SZEP (its lambda is then lambda*, the eigenvalues those
 /// of the dense path to about 1e-8 relative); otherwise they are analysed dense. -k 0 (all
 /// eigenvalues) of components of at most 2000 poses is always dense.
+///
+/// 3D graphs (g2o VERTEX_SE3:QUAT/EDGE_SE3:QUAT, TORO VERTEX3/EDGE3): each component is solved
+/// as by pgo-solve (SE-Sync's problem, the staircase), then the K smallest eigenvalues (10 with
+/// -k 0, at most 100) are computed sparse, as above, of SE-Sync's data matrix Q over [t; Y] with
+/// one translation anchored (the 3D W), of the certificate matrix S = Q - blkdiag(0, Lambda) at
+/// the estimate (the 3D W(lambda*); Lambda_i = sym((QX)_i X_i^T), SE-Sync eq. (48)) and of the
+/// rotation-only matrix M = Q_YY - Q_Yt L^-1 Q_tY (the translations eliminated). At a certified
+/// optimum S has three eigenvalues at zero (the estimate's three columns): the zero count is the
+/// certificate's deflated count (its LDL^T inertia proves the fourth eigenvalue positive), else
+/// the computed eigenvalues of S below the zero threshold above with the gap cost - lower bound;
+/// szep says the certificate counted exactly three. The JSON adds "dimension": 3 and
+/// "certified", and leaves out tree, balanced, lambda and sdp_converged; --solver is not used.
 #[derive(Debug, Parser)]
 #[command(name = "pgo-spectrum", version, after_help = super::after_help(EXAMPLES))]
 pub struct Args {
@@ -83,9 +100,13 @@ pub fn main() -> ExitCode {
 }
 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
-    let rec = args.rerun.recorder("pgo-spectrum")?;
     let progress = args.progress.start("pgo-spectrum");
-    let (graph, read_report) = args.input.read_shown(&progress)?;
+    let (graph, read_report) = args.input.read_any_shown(&progress)?;
+    let graph = match graph {
+        io::AnyGraph::Planar(graph) => graph,
+        io::AnyGraph::Spatial(graph) => return run3(args, &graph, &read_report, progress),
+    };
+    let rec = args.rerun.recorder("pgo-spectrum")?;
     rec.graph(&graph);
     let options = SpectrumOptions {
         weights: args.weights.weights,
@@ -119,6 +140,65 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     });
     rec.finish()?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// What `--json` prints for a 3D graph: [`Spectrum3`] and the reader's warnings.
+#[derive(Serialize)]
+pub struct JsonReport3<'a> {
+    #[serde(flatten)]
+    pub report: &'a Spectrum3,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
+/// The rest of [`run`] for a 3D graph: [`spectrum3`] and its report.
+fn run3(
+    args: &Args,
+    graph: &crate::graph3::Graph3,
+    read_report: &io::ReadReport,
+    progress: super::progress_bar::Progress,
+) -> crate::Result<ExitCode> {
+    let r = &args.rerun;
+    if r.rerun_save.is_some() || r.rerun_connect.is_some() || r.rerun_spawn {
+        return Err(Error::Invalid(
+            "--rerun-save, --rerun-connect, --rerun-spawn: 3D graphs are not recorded yet".into(),
+        ));
+    }
+    let report = progress.watch(|| spectrum3(graph, args.weights.weights, args.count))?;
+    progress.finish();
+    for c in report.components.iter().filter(|c| !c.eigen_converged) {
+        eprintln!(
+            "pgo-spectrum: warning: the eigenvalue iteration of the component of pose {} did not converge; its eigenvalues are upper bounds",
+            c.first_id
+        );
+    }
+    let text = if args.json {
+        to_json_line(&JsonReport3 {
+            report: &report,
+            warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        })?
+    } else {
+        text_report3(&report)
+    };
+    write_stdout(text.as_bytes())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn text_report3(r: &Spectrum3) -> String {
+    let list = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(" ");
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    format!(
+        "poses:                 {}\nedges:                 {}\ndimension:             3\nweights:               {}\neigenvalues of Q:      {}\neigenvalues of S:      {}\neigenvalues of M:      {}\nzero eigenvalues:      {} of S\nthree zeros (SZEP):    {}\ncertified:             {}\n",
+        r.poses,
+        r.edges,
+        r.weights.name(),
+        list(&r.eigenvalues),
+        list(&r.penalized_eigenvalues),
+        list(&r.rotation_eigenvalues),
+        r.near_zero,
+        yes(r.szep),
+        yes(r.certified)
+    )
 }
 
 fn text_report(r: &Report) -> String {

@@ -26,7 +26,10 @@
 //! and the estimates 1/μ_k − σ converge to θ_k at the rate ρ_k = ((θ_k + σ)/(θ_{b+1} + σ))² per
 //! step. Iteration stops when, for each of the K estimates, the error its last change δ
 //! foretells, δ·ρ/(1 − ρ) with ρ the ratio of the last two changes, is at most
-//! `tolerance`·|θ_k|, or δ itself is below 16·u·‖A‖_∞ (the rounding level of the estimates).
+//! `tolerance`·|θ_k|, or δ itself is below 16·u·‖A‖_∞ (the rounding level of the estimates),
+//! or below 16·u·μ_max/μ_k² (the rounding of the Rayleigh-Ritz values μ of T, where eigenvalues
+//! at zero, μ ≈ 1/σ, dwarf the rest) once the theoretical contraction ρ_k^i, ρ_k ≤
+//! (μ_min/μ_k)², of the i steps taken is below `tolerance`.
 //!
 //! The values returned are the Rayleigh-Ritz values of the pencil (A, B) on span(T X), computed
 //! with A itself (products with its stored entries, or a form Z ↦ Z*AZ the caller supplies,
@@ -251,8 +254,20 @@ pub fn smallest_eigenvalues(
                 } else {
                     0.999
                 };
+                // μ_j, an eigenvalue of the b x b matrix X*Y, is computed within about
+                // u·μ_max (Weyl; a backward stable eigensolver), so θ_j = 1/μ_j − σ within
+                // u·μ_max/μ_j²: the rounding level of θ_j when eigenvalues at zero
+                // (μ_max ≈ 1/σ) dwarf it, as the three null directions of the SE(3)
+                // certificate matrix do. Its changes then no longer tell the convergence, which
+                // the theory does: the error of θ_j shrinks by ρ_j = ((θ_j + σ)/(θ_{b+1} + σ))²
+                // ≤ (μ_min/μ_j)² per step, so after i steps it is below ρ_j^i times the spread.
+                let mu_j = mu[block - 1 - j];
+                let ritz = 16.0 * f64::EPSILON * mu[block - 1].abs() / (mu_j * mu_j);
+                let theory = (mu[0] / mu_j).powi(2).powi(iterations as i32);
                 previous.is_finite()
-                    && (d <= floor || d * rate / (1.0 - rate) <= options.tolerance * next[j].abs())
+                    && (d <= floor
+                        || (d <= ritz && theory <= options.tolerance)
+                        || d * rate / (1.0 - rate) <= options.tolerance * next[j].abs())
             });
         estimates = next;
         changes = change;

@@ -29,6 +29,7 @@ pub mod rounding;
 pub mod sdp;
 pub mod stiefel;
 
+use crate::error::Error;
 use crate::graph3::Graph3;
 use certificate::{Bound3, Certifier3};
 use local::{LocalOptions, Step3, Translations, optimize};
@@ -354,6 +355,74 @@ pub fn certify_estimate3(
         bound,
         gradient_norm,
     }
+}
+
+/// Every connected component of a 3D graph as a graph of its own, and its poses' indices in the
+/// whole graph (ascending).
+pub fn components3(graph: &Graph3) -> Vec<(Graph3, Vec<usize>)> {
+    let (label, count) = graph.connected_components();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); count];
+    let mut local = vec![0; graph.num_poses()];
+    for (k, &l) in label.iter().enumerate() {
+        local[k] = members[l].len();
+        members[l].push(k);
+    }
+    members
+        .into_iter()
+        .enumerate()
+        .map(|(c, m)| {
+            let part = Graph3 {
+                ids: m.iter().map(|&k| graph.ids[k]).collect(),
+                poses: m.iter().map(|&k| graph.poses[k]).collect(),
+                edges: graph
+                    .edges
+                    .iter()
+                    .filter(|e| label[e.i] == c)
+                    .map(|e| {
+                        let mut e = *e;
+                        e.i = local[e.i];
+                        e.j = local[e.j];
+                        e
+                    })
+                    .collect(),
+                fixed: graph
+                    .fixed
+                    .iter()
+                    .filter(|&&k| label[k] == c)
+                    .map(|&k| local[k])
+                    .collect(),
+                form: graph.form,
+            };
+            (part, m)
+        })
+        .collect()
+}
+
+/// The 3D graphs the staircase does not take (an error naming why): no poses, an edge from a
+/// pose to itself, several FIX poses in one component.
+pub fn check3(graph: &Graph3, parts: &[(Graph3, Vec<usize>)]) -> Result<(), Error> {
+    if graph.num_poses() == 0 {
+        return Err(Error::Invalid("the graph has no poses".into()));
+    }
+    if let Some(e) = graph.edges.iter().find(|e| e.i == e.j) {
+        return Err(Error::Invalid(format!(
+            "edge {} -> {} joins a pose to itself: 3D graphs with such edges are not solved",
+            graph.ids[e.i], graph.ids[e.j]
+        )));
+    }
+    if let Some((part, _)) = parts.iter().find(|(p, _)| p.fixed.len() > 1) {
+        let mut ids: Vec<u32> = part.fixed.iter().map(|&k| part.ids[k]).collect();
+        ids.sort_unstable();
+        let list: Vec<String> = ids.iter().map(u32::to_string).collect();
+        return Err(Error::Invalid(format!(
+            "FIX lines name vertices {}, which are in one connected component: several fixed \
+             poses in one component are known poses, a constrained problem that pgo does not \
+             solve or certify (one FIX per component only sets the gauge); keep at most one \
+             FIX line per component",
+            list.join(", ")
+        )));
+    }
+    Ok(())
 }
 
 /// The rotation matrix and translation of a file pose.

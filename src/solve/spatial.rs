@@ -13,7 +13,9 @@ use crate::problem::weights::Weights;
 use crate::se3::local::Step3;
 use crate::se3::problem::weights3;
 use crate::se3::rounding::Rt;
-use crate::se3::{Options3, certify_estimate3 as certify_component, rt_of, solve_graph3};
+use crate::se3::{
+    Options3, certify_estimate3 as certify_component, check3, components3, rt_of, solve_graph3,
+};
 use nalgebra::{Isometry3, Matrix3, Rotation3 as NRotation3, Translation3, UnitQuaternion};
 use serde::Serialize;
 
@@ -51,72 +53,6 @@ pub struct Solution3 {
     /// component's FIX pose, else its first pose, exactly where the input has it).
     #[serde(skip)]
     pub estimate: Vec<Pose3>,
-}
-
-/// A connected component of a 3D graph as a graph of its own, and its poses' indices in the
-/// whole graph (ascending).
-fn components(graph: &Graph3) -> Vec<(Graph3, Vec<usize>)> {
-    let (label, count) = graph.connected_components();
-    let mut members: Vec<Vec<usize>> = vec![Vec::new(); count];
-    let mut local = vec![0; graph.num_poses()];
-    for (k, &l) in label.iter().enumerate() {
-        local[k] = members[l].len();
-        members[l].push(k);
-    }
-    members
-        .into_iter()
-        .enumerate()
-        .map(|(c, m)| {
-            let part = Graph3 {
-                ids: m.iter().map(|&k| graph.ids[k]).collect(),
-                poses: m.iter().map(|&k| graph.poses[k]).collect(),
-                edges: graph
-                    .edges
-                    .iter()
-                    .filter(|e| label[e.i] == c)
-                    .map(|e| {
-                        let mut e = *e;
-                        e.i = local[e.i];
-                        e.j = local[e.j];
-                        e
-                    })
-                    .collect(),
-                fixed: graph
-                    .fixed
-                    .iter()
-                    .filter(|&&k| label[k] == c)
-                    .map(|&k| local[k])
-                    .collect(),
-                form: graph.form,
-            };
-            (part, m)
-        })
-        .collect()
-}
-
-fn check(graph: &Graph3, parts: &[(Graph3, Vec<usize>)]) -> crate::Result<()> {
-    if graph.num_poses() == 0 {
-        return Err(Error::Invalid("the graph has no poses".into()));
-    }
-    if let Some(e) = graph.edges.iter().find(|e| e.i == e.j) {
-        return Err(Error::Invalid(format!(
-            "edge {} -> {} joins a pose to itself: 3D graphs with such edges are not solved",
-            graph.ids[e.i], graph.ids[e.j]
-        )));
-    }
-    if let Some((part, _)) = parts.iter().find(|(p, _)| p.fixed.len() > 1) {
-        let mut ids: Vec<u32> = part.fixed.iter().map(|&k| part.ids[k]).collect();
-        ids.sort_unstable();
-        let list: Vec<String> = ids.iter().map(u32::to_string).collect();
-        return Err(Error::Invalid(format!(
-            "FIX lines name vertices {}, which are in one connected component: several fixed \
-             poses in one component are known poses, a constrained problem that pgo does not \
-             solve or certify (one FIX per component only sets the gauge); keep at most one \
-             FIX line per component",
-            list.join(", ")
-        )));
-    }
-    Ok(())
 }
 
 fn isometry(p: &Rt) -> Isometry3<f64> {
@@ -180,8 +116,8 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
             "--method sdp: Algorithm 1 (the dual SDP) is planar; 3D graphs are solved by the staircase (--method auto or staircase)".into(),
         ));
     }
-    let parts = components(graph);
-    check(graph, &parts)?;
+    let parts = components3(graph);
+    check3(graph, &parts)?;
     let unit = options.weights == Weights::Unit;
     let staircase = Options3 {
         tolerance: options.tolerance,
@@ -314,8 +250,8 @@ pub fn certify_estimate3(
     options: &CertifyOptions,
     source: &str,
 ) -> crate::Result<EstimateReport> {
-    let parts = components(graph);
-    check(graph, &parts)?;
+    let parts = components3(graph);
+    check3(graph, &parts)?;
     let unit = options.weights == Weights::Unit;
     let tol = options.tolerance;
     let mut comps = Vec::new();

@@ -3,14 +3,17 @@
 //! graphs and full spectra (all eigenvalues, from Algorithm 1's dual analysis); sparse for large
 //! ones and for the K smallest of any component of more than [`SPARSE_MIN_POSES`] poses (the
 //! smallest few, [`sparse`], with λ from the scalable solver, where its certificate proves them
-//! the same).
+//! the same). 3D graphs: [`spatial`] (Q, the certificate matrix S and M of SE-Sync's problem;
+//! three zeros of S in place of the SZEP's one).
 //!
-//! May use: [`crate::staircase`], [`crate::dual`], [`crate::certify`], [`crate::problem`],
-//! [`crate::linalg`].
+//! May use: [`crate::staircase`], [`crate::dual`], [`crate::se3`], [`crate::certify`],
+//! [`crate::problem`], [`crate::linalg`].
 
 pub mod sparse;
+pub mod spatial;
 
 pub use sparse::*;
+pub use spatial::{ComponentSpectrum3, Spectrum3, spectrum3};
 
 use crate::dual::algorithm1::{DENSE_MAX_POSES, analyze};
 use crate::dual::solver::SdpSolver;
