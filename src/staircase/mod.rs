@@ -300,12 +300,17 @@ pub fn solve_anchored_from(
     // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
     // or its spanning-tree composition for edges-only files), so the problem is built once; the
     // same with a warm start, so that warm and cold starts solve the same problem.
+    let start = start.filter(|s| s.len() == graph.num_poses());
+    crate::progress::phase(if start.is_some() {
+        "initialization (the given estimate)"
+    } else {
+        "initialization (chordal)"
+    });
     let anchored = Anchored::centered(graph, weights, &graph.poses);
-    if let Some(start) = start.filter(|s| s.len() == graph.num_poses()) {
+    if let Some(start) = start {
         if graph.connected_components().1 != 1 {
             return None;
         }
-        crate::progress::phase("initialization (the given estimate)");
         let start = Point {
             p: 1,
             x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
@@ -316,7 +321,6 @@ pub fn solve_anchored_from(
         let solution = solve_from(&anchored.problem, start, options, observer);
         return Some((solution, anchored));
     }
-    crate::progress::phase("initialization (chordal)");
     // With landmarks, the chordal relaxation of the whole problem ([`init::chordal_full`]).
     // Poses joined only through landmarks have no rotation measurement between them: the
     // chordal relaxation of the rotations is then singular, and the rotations of the input's estimate (the
