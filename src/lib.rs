@@ -26,8 +26,10 @@
 //! The library behind the command-line tools, in layers; each imports only the layers below it
 //! (ARCHITECTURE.md):
 //!
-//! - [`solve`] (top): the whole jobs as one call each: [`solve()`] a graph to a certified optimum,
-//!   [`certify_estimate`] any estimate; [`spectrum::spectrum`] the graph's spectra;
+//! - [`robust`] (top): graduated non-convexity over [`solve()`] for graphs with false loop
+//!   closures;
+//! - [`solve`]: the whole jobs as one call each: [`solve()`] a graph to a certified optimum
+//!   ([`solve_from()`] warm started from an estimate), [`certify_estimate`] any estimate; [`spectrum::spectrum`] the graph's spectra;
 //! - [`spectrum`]: eigenvalues of W̃, W̃(λ*) and M, dense or sparse, and the SZEP;
 //! - [`refine`]: local refinement (Levenberg-Marquardt under the full information, g2o's chi2;
 //!   Gauss-Newton on f);
@@ -69,4 +71,4 @@ pub use pgo_io::{graph, graph3, io, stats, vertigo};
 
 pub use error::{Error, Result};
 pub use graph::{Edge, NoiseKind, Pose2, PoseGraph, SymMat3, VertexId};
-pub use solve::{Solution, SolveOptions, certify_estimate, solve};
+pub use solve::{Solution, SolveOptions, certify_estimate, solve, solve_from};

@@ -28,6 +28,7 @@ complete -c pgo-solve -l ignore-equiv -d 'Skip TORO\'s EQUIV lines (vertex merge
 complete -c pgo-solve -l allow-indefinite -d 'Accept noise matrices that are not positive definite (the solvers take them only with --weights unit)'
 complete -c pgo-solve -l refine -d 'Refine the certified estimate by Levenberg-Marquardt under the file\'s full information matrices (g2o\'s chi2; on SE(3)^n for 3D g2o graphs) before writing it; the report\'s cost and bound stay those of the certified estimate, chi2 before and after is added, and the report says that the written estimate is the refined one, which is not certified (check it with pgo-certify)'
 complete -c pgo-solve -l all-edges-uncertain -d 'With --robust: odometry edges (consecutive ids) may be rejected too (by default they are known inliers)'
+complete -c pgo-solve -l warm-start -d 'With --robust: start each GNC inner problem after the first, and the inlier set\'s problem, from the previous iteration\'s estimate instead of the chordal initialization (slower, and worse inlier sets, on the benchmark files: see the README)'
 complete -c pgo-solve -l drop-outliers -d 'With --robust: write the estimate without the rejected edges (by default -o holds every edge as read)'
 complete -c pgo-solve -l fail-uncertified -d 'Exit with status 1 when the result is not certified within --tol (the estimate is still written); without it, status 0 either way'
 complete -c pgo-solve -l json -d 'Print the report as one JSON object on stdout (the graph then goes only to -o)'

@@ -137,6 +137,12 @@ pub struct Args {
     #[arg(long, requires = "robust")]
     pub all_edges_uncertain: bool,
 
+    /// With --robust: start each GNC inner problem after the first, and the inlier set's problem,
+    /// from the previous iteration's estimate instead of the chordal initialization (slower, and
+    /// worse inlier sets, on the benchmark files: see the README)
+    #[arg(long, requires = "robust")]
+    pub warm_start: bool,
+
     /// With --robust: write the estimate without the rejected edges (by default -o holds every
     /// edge as read)
     #[arg(long, requires = "robust")]
@@ -236,6 +242,8 @@ pub struct RobustReport {
     pub loss: Loss,
     pub inlier_threshold: f64,
     pub odometry_known_inliers: bool,
+    /// Whether the inner problems after the first were warm started (`--warm-start`).
+    pub warm_start: bool,
     /// Edges of the input.
     pub input_edges: usize,
     /// Edges GNC could reject (not known inliers).
@@ -283,6 +291,7 @@ impl RobustReport {
             loss: options.loss,
             inlier_threshold: options.inlier_threshold,
             odometry_known_inliers: options.odometry_inliers,
+            warm_start: options.warm_start,
             input_edges: graph.edges.len(),
             uncertain_edges: r.uncertain.iter().filter(|&&u| u).count(),
             inliers: graph.edges.len() - rejected_edges.len(),
@@ -390,6 +399,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 loss,
                 inlier_threshold: args.inlier_threshold.unwrap_or(DEFAULT_INLIER_THRESHOLD),
                 odometry_inliers: !args.all_edges_uncertain,
+                warm_start: args.warm_start,
                 solve: options,
                 ..Default::default()
             };

@@ -24,7 +24,7 @@ use crate::problem::gauge::move_pose_to;
 use crate::problem::matrix::cost;
 use crate::problem::weights::{EdgeWeight, Weights, edge_weights};
 use crate::simulate::wrap_angle;
-use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_graph};
+use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_graph_from_estimate};
 use serde::Serialize;
 
 /// How each connected component is solved.
@@ -212,6 +212,62 @@ pub struct Solution {
 /// Besides the solvers' own: two or more fixed poses (`FIX`) in one connected component, which
 /// make a problem with known poses that this does not solve.
 pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solution> {
+    solve_with(graph, None, options)
+}
+
+/// As [`solve`], warm started from `initial`, an estimate of the graph's poses (one per pose, in
+/// the graph's order, in any gauge): the scalable solver starts its Riemannian Newton at rank 1
+/// from `initial`'s headings instead of the chordal initialization (its positions are replaced
+/// by the ones optimal for those headings, as every rank-1 point's are). What is proven is not
+/// affected: the certificate proves whatever point the local solver reaches, and the bound is
+/// computed exactly as for a cold start. Components solved by Algorithm 1 (the dual SDP, no
+/// starting point) ignore `initial`.
+///
+/// The use: an outer loop solving a sequence of nearby problems, such as the variable updates of
+/// graduated non-convexity (Yang, Antonante, Tzoumas and Carlone, RA-L 2020, Algorithm 1: the
+/// weighted least-squares problem min_x Σ w_e r_e²(x) under the weights of eq. (12) or (14), one
+/// per iteration; see [`crate::robust::gnc`]), each started from the previous one's estimate.
+///
+/// # Errors
+///
+/// Those of [`solve`]; `initial` not of one pose per pose of the graph, or with a coordinate that
+/// is not finite.
+pub fn solve_from(
+    graph: &PoseGraph,
+    initial: &[Pose2],
+    options: &SolveOptions,
+) -> crate::Result<Solution> {
+    check_initial(graph, initial)?;
+    solve_with(graph, Some(initial), options)
+}
+
+/// Refuses an initial estimate that is not one finite pose per pose of `graph`.
+fn check_initial(graph: &PoseGraph, initial: &[Pose2]) -> crate::Result<()> {
+    if initial.len() != graph.num_poses() {
+        return Err(Error::Invalid(format!(
+            "the initial estimate has {} poses, the graph {}: give one pose per pose of the graph, in its order",
+            initial.len(),
+            graph.num_poses()
+        )));
+    }
+    if let Some(k) = initial
+        .iter()
+        .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.theta.is_finite()))
+    {
+        let p = initial[k];
+        return Err(Error::Invalid(format!(
+            "the initial estimate of vertex {} is not finite ({} {} {})",
+            graph.ids[k], p.x, p.y, p.theta
+        )));
+    }
+    Ok(())
+}
+
+fn solve_with(
+    graph: &PoseGraph,
+    initial: Option<&[Pose2]>,
+    options: &SolveOptions,
+) -> crate::Result<Solution> {
     check_not_empty(graph)?;
     if options.method == Method::Sdp {
         check_dense_size(graph, "--method sdp")?;
@@ -235,10 +291,18 @@ pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solutio
             Method::Auto => n <= AUTO_SDP_MAX_POSES,
         };
         let run_sdp = || algorithm1::solve_connected(&part, &weights, options.solver);
+        // The warm start's poses of this component, in its order.
+        let start: Option<Vec<Pose2>> = initial.map(|p| members.iter().map(|&k| p[k]).collect());
         let run_staircase = || -> crate::Result<(StaircaseSolution, Vec<Pose2>)> {
             check_edge_terms(&part, &weights, &weights)?;
-            solve_graph(&part, &weights, &staircase, &mut report_step())
-                .ok_or_else(|| Error::Invalid("the graph is not connected".into()))
+            solve_graph_from_estimate(
+                &part,
+                &weights,
+                &staircase,
+                start.as_deref(),
+                &mut report_step(),
+            )
+            .ok_or_else(|| Error::Invalid("the graph is not connected".into()))
         };
         // The first method as chosen; where it certifies, its result as it is.
         let mut algorithm1 = None;

@@ -245,7 +245,23 @@ pub fn solve_graph(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Vec<Pose2>)> {
-    let (solution, anchored) = solve_anchored(graph, weights, options, observer)?;
+    solve_graph_from_estimate(graph, weights, options, None, observer)
+}
+
+/// As [`solve_graph`], warm started: with `start` (one pose per pose of the graph, in its
+/// indexing and any gauge), its headings are the rank-1 starting point in place of the chordal
+/// initialization, and its positions are not used (every rank-1 point, the start too, takes the
+/// positions optimal for its rotations: variable projection, module docs). The problem, its
+/// anchor and the certificate are those of the cold start: only where Newton begins changes.
+/// The caller checks `start` (its length, finite values).
+pub fn solve_graph_from_estimate(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    options: &StaircaseOptions,
+    start: Option<&[Pose2]>,
+    observer: &mut dyn FnMut(&Iteration),
+) -> Option<(StaircaseSolution, Vec<Pose2>)> {
+    let (solution, anchored) = solve_anchored_from(graph, weights, options, start, observer)?;
     let poses = anchored.poses(&solution.point, graph.poses[0]);
     Some((solution, poses))
 }
@@ -258,10 +274,53 @@ pub fn solve_anchored(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Anchored)> {
+    solve_anchored_from(graph, weights, options, None, observer)
+}
+
+/// The headings of `start` (graph indexing) as the anchored problem's rank-1 rotations, turned
+/// so that the anchor's is 1 (the chordal initialization's gauge; f is invariant to it).
+fn start_rotations(anchored: &Anchored, start: &[Pose2]) -> Vec<c64> {
+    let swap = swapper(anchored.anchor);
+    let r: Vec<c64> = (0..anchored.problem.n)
+        .map(|k| crate::problem::matrix::rotation(start[swap(k)].theta))
+        .collect();
+    let turn = r[0].conj();
+    r.into_iter().map(|z| z * turn).collect()
+}
+
+/// As [`solve_anchored`], from `start`'s headings when given (see
+/// [`solve_graph_from_estimate`]).
+pub fn solve_anchored_from(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    options: &StaircaseOptions,
+    start: Option<&[Pose2]>,
+    observer: &mut dyn FnMut(&Iteration),
+) -> Option<(StaircaseSolution, Anchored)> {
     // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
-    // or its spanning-tree composition for edges-only files), so the problem is built once.
-    crate::progress::phase("initialization (chordal)");
+    // or its spanning-tree composition for edges-only files), so the problem is built once; the
+    // same with a warm start, so that warm and cold starts solve the same problem.
+    let start = start.filter(|s| s.len() == graph.num_poses());
+    crate::progress::phase(if start.is_some() {
+        "initialization (the given estimate)"
+    } else {
+        "initialization (chordal)"
+    });
     let anchored = Anchored::centered(graph, weights, &graph.poses);
+    if let Some(start) = start {
+        if graph.connected_components().1 != 1 {
+            return None;
+        }
+        let start = Point {
+            p: 1,
+            x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
+                .into_iter()
+                .chain(start_rotations(&anchored, start))
+                .collect(),
+        };
+        let solution = solve_from(&anchored.problem, start, options, observer);
+        return Some((solution, anchored));
+    }
     // With landmarks, the chordal relaxation of the whole problem ([`init::chordal_full`]).
     // Poses joined only through landmarks have no rotation measurement between them: the
     // chordal relaxation of the rotations is then singular, and the rotations of the input's estimate (the
