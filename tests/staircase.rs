@@ -375,6 +375,43 @@ fn the_work_budget_stops_the_staircase_with_a_sound_bound() {
 }
 
 #[test]
+fn the_first_descent_is_bounded_by_the_budget() {
+    // M3500 with 1000 false loop closures (Vertigo's random model, seed 1): the long closures
+    // fill the factor and Newton at rank 1 is far from converged after 200 steps. Under a budget
+    // of 0 the first descent stops at MIN_DESCENT_STEPS (then at most 4 polishing steps), says
+    // so, and the bound it reports is still one: below the cost of the estimate it returns.
+    use pgo::robust::outliers::{OutlierConfig, OutlierModel, add_outliers};
+    use pgo::staircase::MIN_DESCENT_STEPS;
+    let path = common::datasets_dir().join("M3500.g2o");
+    let (mut g, _) = pgo::io::read_path(path.to_str().unwrap(), &Default::default()).unwrap();
+    add_outliers(
+        &mut g,
+        &OutlierConfig {
+            count: 1000,
+            model: OutlierModel::Random,
+            group: 1,
+            noise: None,
+            seed: 1,
+        },
+    )
+    .unwrap();
+    let w = edge_weights(&g, Weights::Isotropic).unwrap();
+    let options = StaircaseOptions {
+        staircase_budget: 0.0,
+        ..Default::default()
+    };
+    let (s, _) = solve_graph(&g, &w, &options, &mut |_| {}).unwrap();
+    assert!(s.limit_reached && !s.certified, "{s:?}");
+    assert_eq!(s.rank, 1);
+    assert!(
+        (MIN_DESCENT_STEPS..=MIN_DESCENT_STEPS + 4).contains(&s.iterations),
+        "{} steps",
+        s.iterations
+    );
+    assert!(s.lower_bound <= s.cost, "{} > {}", s.lower_bound, s.cost);
+}
+
+#[test]
 fn pgo_solve_reports_the_staircase_limits() {
     let toy = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
     let solve = |flags: &[&str]| {

@@ -150,7 +150,9 @@ class Solution(_Report):
     ``certified``, ``not_certified_because``, ``szep``, ``near_zero_eigenvalues``,
     ``sdp_converged``, ``method``, ``solver``, ``weights``, ``edges``, ``observations``,
     ``refined_chi2``, ``components`` (a list of dicts), ``written_estimate``, ``written_chi2``,
-    ``written_certified``, ``warnings``. Fields the report leaves out are ``None`` (``0`` for
+    ``written_certified``, ``suspect_loop_closures`` (not certified: a dict of
+    ``above_threshold``, ``loop_closures`` and ``threshold``, the loop closures above the robust
+    inlier threshold at the estimate), ``warnings``. Fields the report leaves out are ``None`` (``0`` for
     ``observations``, ``[]`` for ``warnings``). The report is ``pgo-solve --json --no-timings``'s
     for the same graph and options; ``tol`` is the tolerance asked for.
     """
@@ -160,6 +162,7 @@ class Solution(_Report):
         "observations": 0,
         "refined_chi2": None,
         "not_certified_because": None,
+        "suspect_loop_closures": None,
     }
 
     poses: np.ndarray
@@ -185,6 +188,7 @@ class Solution(_Report):
     written_estimate: str
     written_chi2: Optional[float]
     written_certified: bool
+    suspect_loop_closures: Optional[Dict[str, Any]]
     warnings: List[str]
 
     def __init__(self, report: Dict[str, Any], poses: np.ndarray, landmarks: np.ndarray, tol: float):

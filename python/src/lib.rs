@@ -760,7 +760,10 @@ fn solve<'py>(
     let solution = py
         .detach(|| pgo::solve(&g.graph, &options))
         .map_err(|e| to_py(py, e))?;
-    let report = pgo::cli::solve::Report::new(&solution, None, g.warnings.clone(), None);
+    let mut report = pgo::cli::solve::Report::new(&solution, None, g.warnings.clone(), None);
+    report
+        .note_suspect_loop_closures(&g.graph, options.weights)
+        .map_err(|e| to_py(py, e))?;
     let json = pgo::cli::common::to_json_line(&report).map_err(|e| to_py(py, e))?;
     let poses = solution.estimate.iter().flat_map(|p| p.values()).collect();
     let landmarks = solution

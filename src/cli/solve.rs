@@ -105,12 +105,13 @@ pub struct Args {
     #[arg(long, default_value = "6", value_name = "P", value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_rank: u32,
 
-    /// The staircase's work above rank 1 at most, in 10⁹ multiply-adds of its sparse
-    /// factorizations (Newton steps, certificate attempts), counted from the factors' structure
-    /// and not timed, so the answer is the same on every machine; about 20 per second on one
-    /// core. Past it the solver reports the best estimate and bound it reached and why it
-    /// stopped. Graphs of a few hundred poses never reach the default; long false loop closures
-    /// (outliers) fill the factors and reach it in seconds (try --robust)
+    /// The staircase's work at most, in 10⁹ multiply-adds of its sparse factorizations (Newton
+    /// steps, certificate attempts), counted from the factors' structure and not timed, so the
+    /// answer is the same on every machine; about 20 per second on one core. The first descent
+    /// at rank 1 may always take 50 Newton steps. Past it the solver reports the best estimate
+    /// and bound it reached and why it stopped. Graphs of a few hundred poses never reach the
+    /// default; long false loop closures (outliers) fill the factors and reach it in seconds
+    /// (try --robust)
     #[arg(long, default_value = "200", value_name = "GMA", value_parser = super::common::parse_budget, allow_negative_numbers = true)]
     pub staircase_budget: f64,
 
@@ -216,10 +217,26 @@ pub struct Report<'a> {
     /// set's problem).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustReport>,
+    /// Not certified (and without --robust, landmarks): the loop closures --robust would start
+    /// out rejecting at the estimate, a sign of false loop closures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub suspect_loop_closures: Option<SuspectLoopClosures>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings: Option<Timings>,
+}
+
+/// Loop closures (every edge but the odometry) whose residual r_e² at the estimate exceeds
+/// --robust's inlier threshold ([`crate::robust::gnc::suspect_loop_closures`]).
+#[derive(Debug, Serialize)]
+pub struct SuspectLoopClosures {
+    /// How many exceed it.
+    pub above_threshold: usize,
+    /// Loop closures in the graph.
+    pub loop_closures: usize,
+    /// The threshold c̄² (--inlier-threshold's default, 0.5 chi2inv(0.99, 3)).
+    pub threshold: f64,
 }
 
 /// An edge GNC rejected.
@@ -327,9 +344,37 @@ impl<'a> Report<'a> {
             },
             written_certified: !refined && solution.certified,
             robust,
+            suspect_loop_closures: None,
             warnings,
             timings,
         }
+    }
+
+    /// Fills [`Report::suspect_loop_closures`] when the solution is not certified, without
+    /// --robust and landmarks: the loop closures of `graph` (the graph solved, under `weights`)
+    /// above --robust's default inlier threshold at the estimate.
+    ///
+    /// # Errors
+    ///
+    /// Those of the weights.
+    pub fn note_suspect_loop_closures(
+        &mut self,
+        graph: &crate::graph::PoseGraph,
+        weights: crate::problem::weights::Weights,
+    ) -> crate::Result<()> {
+        let s = self.solution;
+        if s.certified || self.robust.is_some() || !graph.landmarks.is_empty() {
+            return Ok(());
+        }
+        let threshold = DEFAULT_INLIER_THRESHOLD;
+        let (above_threshold, loop_closures) =
+            crate::robust::gnc::suspect_loop_closures(graph, weights, &s.estimate, threshold)?;
+        self.suspect_loop_closures = Some(SuspectLoopClosures {
+            above_threshold,
+            loop_closures,
+            threshold,
+        });
+        Ok(())
     }
 }
 
@@ -467,7 +512,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let marginals_s = args.marginals.is_some().then(|| t3.elapsed().as_secs_f64());
     progress.finish();
 
-    let report = Report::new(
+    let mut report = Report::new(
         &solution,
         robust,
         read_report.warnings.iter().map(|w| w.to_string()).collect(),
@@ -478,6 +523,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             marginals_s,
         }),
     );
+    report.note_suspect_loop_closures(&graph, options.weights)?;
     if let Some(solver) = args.solver
         && !solution.components.iter().any(|c| c.method == Method::Sdp)
     {
@@ -919,6 +965,25 @@ fn text_report(input: &str, report: &Report) -> String {
     );
     if let Some(why) = &r.not_certified_because {
         out += &row("why not certified", why.clone());
+    }
+    if let Some(s) = &report.suspect_loop_closures {
+        out += &row(
+            "loop closures",
+            if s.above_threshold == 0 {
+                format!(
+                    "none of {} has r^2 above --robust's inlier threshold {} at this estimate",
+                    s.loop_closures,
+                    num(s.threshold)
+                )
+            } else {
+                format!(
+                    "{} of {} have r^2 above --robust's inlier threshold {} at this estimate (about 1% of true ones would); if some are false, try --robust tls",
+                    s.above_threshold,
+                    s.loop_closures,
+                    num(s.threshold)
+                )
+            },
+        );
     }
     if let Some(chi2) = r.refined_chi2 {
         let before: f64 = r.components.iter().filter_map(|c| c.certified_chi2).sum();

@@ -72,7 +72,7 @@ pub struct SolveOptions {
     pub refine: bool,
     /// The staircase's largest rank ([`StaircaseOptions::max_rank`], default 6).
     pub max_rank: usize,
-    /// The staircase's work above rank 1 at most, in real multiply-adds of its factorizations
+    /// The staircase's work at most, in real multiply-adds of its factorizations
     /// ([`StaircaseOptions::staircase_budget`], default [`crate::staircase::STAIRCASE_BUDGET`]).
     pub staircase_budget: f64,
 }
