@@ -678,7 +678,7 @@ fn poses3(name: &str, a: &ArrayViewD<'_, f64>, form: Form3, n: usize) -> PyResul
                     let norm2: f64 = q.iter().map(|x| x * x).sum();
                     if !(norm2 > 0.0 && norm2.is_finite()) {
                         return Err(invalid(format!(
-                            "{name}[{k}]: the quaternion ({}, {}, {}, {}) cannot be normalized",
+                            "{name}[{k}]: the quaternion ({:?}, {:?}, {:?}, {:?}) cannot be normalized",
                             q[0], q[1], q[2], q[3]
                         )));
                     }
