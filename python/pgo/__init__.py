@@ -1,8 +1,10 @@
-"""pgo: certifiably optimal planar pose graph optimization, from Python.
+"""pgo: certifiably optimal pose graph optimization, planar and 3D, from Python.
 
 Read a g2o or TORO file, solve it to a certified global optimum, certify any estimate (one from
 GTSAM or g2o too), and look at the spectra behind the certificate; poses, edges and information
-matrices are numpy arrays::
+matrices are numpy arrays. A planar file gives a :class:`Graph`, a 3D one (``VERTEX_SE3:QUAT``/
+``EDGE_SE3:QUAT``, TORO ``VERTEX3``/``EDGE3``) a :class:`Graph3`, and the same calls solve,
+certify and analyse either, as the tools do::
 
     import pgo
     graph = pgo.read("MIT.g2o")            # or the text of a file, or pgo.Graph(poses=..., ...)
@@ -30,12 +32,13 @@ from typing import Any, ClassVar, Dict, List, Optional, Union
 import numpy as np
 
 from . import _pgo
-from ._pgo import Graph, ParseError, PgoError
+from ._pgo import Graph, Graph3, ParseError, PgoError
 
 __version__: str = _pgo.VERSION
 
 __all__ = [
     "Graph",
+    "Graph3",
     "ParseError",
     "PgoError",
     "ReadWarning",
@@ -49,6 +52,10 @@ __all__ = [
 ]
 
 PathOrText = Union[str, bytes, bytearray, "os.PathLike[str]"]
+
+# A planar or a 3D pose graph: what read() returns and the jobs take (for annotations:
+# pgo.AnyGraph; isinstance(graph, pgo.Graph3) tells them apart).
+AnyGraph = Union[Graph, Graph3]
 
 
 class ReadWarning(UserWarning):
@@ -65,8 +72,10 @@ def read(
     strict: bool = False,
     ignore_equiv: bool = False,
     allow_indefinite: bool = False,
-) -> Graph:
-    """Reads a planar pose graph from a g2o or TORO file, or from the text of one.
+) -> AnyGraph:
+    """Reads a pose graph from a g2o or TORO file, or from the text of one: a :class:`Graph`
+    for a planar file, a :class:`Graph3` for a 3D one (g2o ``VERTEX_SE3:QUAT``/``EDGE_SE3:QUAT``,
+    TORO ``VERTEX3``/``EDGE3``), as the tools tell them apart.
 
     ``source`` is text when it is ``bytes``/``bytearray``, or a ``str`` holding a line break
     (``\\n`` or ``\\r``): every graph file with more than one line does; errors then name the
@@ -75,13 +84,14 @@ def read(
     extension (.g2o, .graph), else the tags; ``dialect`` ("g2o", "toro-info", "toro-cov",
     "g2o-cov") says how to read the six noise values (default: by the edge tags), as the tools'
     ``--from`` and ``--dialect``. ``strict``, ``ignore_equiv`` and ``allow_indefinite`` are the
-    tools' flags of the same names.
+    tools' flags of the same names (a 3D file takes only its own dialect, information matrices).
 
     Raises :class:`ParseError` (with ``.path``, ``.line``, ``.column``) for an input error,
     ``OSError`` (e.g. ``FileNotFoundError``) for a file that cannot be read. The reader's
     warnings are issued as :class:`ReadWarning` and kept in ``Graph.warnings``.
     """
     flags = (format, dialect, strict, ignore_equiv, allow_indefinite)
+    graph: AnyGraph
     if isinstance(source, (bytes, bytearray)):
         graph = _pgo.read_bytes(bytes(source), "<string>", *flags)
     elif isinstance(source, str):
@@ -145,6 +155,12 @@ class Solution(_Report):
     estimate is the refined one (``written_estimate == "refined"``), which is not the certified
     one.
 
+    Of a :class:`Graph3`: ``poses`` is (n, 7) ``x y z qx qy qz qw`` (quaternions with w >= 0)
+    for a g2o graph, (n, 6) ``x y z roll pitch yaw`` for a TORO one, the estimate
+    ``pgo-solve -o`` writes; ``landmarks`` is empty, (0, 3); ``dimension`` is 3 (2 for a planar
+    graph), and the report is ``pgo-solve --json``'s for 3D graphs, which has no ``solver``,
+    ``sdp_converged`` nor landmark counts (accessing them raises AttributeError).
+
     Every other field of ``pgo-solve --json`` (README "JSON reports") is an attribute: ``cost``,
     ``chi2``, ``lower_bound``, ``suboptimality_bound``, ``relative_suboptimality_bound``,
     ``certified``, ``not_certified_because``, ``szep``, ``near_zero_eigenvalues``,
@@ -163,6 +179,7 @@ class Solution(_Report):
         "refined_chi2": None,
         "not_certified_because": None,
         "suspect_loop_closures": None,
+        "dimension": 2,
     }
 
     poses: np.ndarray
@@ -190,6 +207,7 @@ class Solution(_Report):
     written_certified: bool
     suspect_loop_closures: Optional[Dict[str, Any]]
     warnings: List[str]
+    dimension: int
 
     def __init__(self, report: Dict[str, Any], poses: np.ndarray, landmarks: np.ndarray, tol: float):
         super().__init__(report)
@@ -211,8 +229,9 @@ class Solution(_Report):
             )
         ran = sorted({c["method"] for c in r["components"]})
         method = r["method"] if ran == [r["method"]] else f"{r['method']} ({', '.join(ran)})"
+        dim = ", 3D" if r.get("dimension") == 3 else ""
         return (
-            f"<pgo.Solution: {head}: {self._bound_text()}; {r['poses']} poses, "
+            f"<pgo.Solution: {head}: {self._bound_text()}; {r['poses']} poses{dim}, "
             f"{len(r['components'])} component(s), method {method}{tail}>"
         )
 
@@ -225,7 +244,8 @@ class Certificate(_Report):
     ``certified`` (within ``tol``), ``gradient_norm``, ``weights``, ``poses``, ``edges``,
     ``components`` (a list of dicts, each with ``bound_from``: "estimate" when the estimate's own
     multipliers proved the bound, "solution" when the optimum's did), ``warnings``; ``tol`` is
-    the tolerance asked for.
+    the tolerance asked for, ``dimension`` the graph's (2, or 3 for a :class:`Graph3`: then the
+    cost is SE-Sync's objective and a certified component's ``near_zero_eigenvalues`` is 3).
     """
 
     cost: float
@@ -241,10 +261,12 @@ class Certificate(_Report):
     components: List[Dict[str, Any]]
     warnings: List[str]
     tol: float
+    dimension: int
 
-    def __init__(self, report: Dict[str, Any], tol: float):
+    def __init__(self, report: Dict[str, Any], tol: float, dimension: int = 2):
         super().__init__(report)
         self.tol = tol
+        self.dimension = dimension
 
     def __bool__(self) -> bool:
         return bool(self._report["certified"])
@@ -255,7 +277,8 @@ class Certificate(_Report):
             if self._report["certified"]
             else f"NOT certified within tol={self.tol:g} (the bound still holds)"
         )
-        return f"<pgo.Certificate: {head}: {self._bound_text()}>"
+        dim = "; 3D" if self.dimension == 3 else ""
+        return f"<pgo.Certificate: {head}: {self._bound_text()}{dim}>"
 
 
 class Spectrum(_Report):
@@ -266,7 +289,15 @@ class Spectrum(_Report):
     (of M); ``near_zero`` (eigenvalues of W(lambda*) at zero), ``szep`` (the single zero
     eigenvalue property holds), ``tree``, ``balanced``, ``sdp_converged``, ``weights``,
     ``poses``, ``edges``, ``components`` (a list of dicts), ``warnings``.
+
+    Of a :class:`Graph3` (``dimension`` 3, else 2): the eigenvalues of SE-Sync's data matrix Q,
+    of the certificate matrix S at the solved estimate and of the rotation-only M; ``near_zero``
+    counts S's zeros (3 at a certified optimum), ``szep`` says the certificate counted exactly
+    three, ``certified`` is added and ``tree``, ``balanced``, ``sdp_converged`` are left out
+    (accessing them raises AttributeError), as in ``pgo-spectrum --json``.
     """
+
+    _absent: ClassVar[Dict[str, Any]] = {"warnings": [], "dimension": 2}
 
     eigenvalues: np.ndarray
     penalized_eigenvalues: np.ndarray
@@ -281,6 +312,8 @@ class Spectrum(_Report):
     edges: int
     components: List[Dict[str, Any]]
     warnings: List[str]
+    dimension: int
+    certified: bool
 
     _arrays = ("eigenvalues", "penalized_eigenvalues", "rotation_eigenvalues")
 
@@ -291,6 +324,12 @@ class Spectrum(_Report):
 
     def __repr__(self) -> str:
         r = self._report
+        if r.get("dimension") == 3:
+            return (
+                f"<pgo.Spectrum: {r['poses']} poses, 3D; smallest eigenvalues of S "
+                f"{list(r['penalized_eigenvalues'][:4])}; {r['near_zero']} at zero, "
+                f"three zeros (SZEP) {'yes' if r['szep'] else 'no'}>"
+            )
         return (
             f"<pgo.Spectrum: {r['poses']} poses; smallest eigenvalues of W(lambda*) "
             f"{list(r['penalized_eigenvalues'][:3])}; {r['near_zero']} at zero, "
@@ -298,19 +337,19 @@ class Spectrum(_Report):
         )
 
 
-def _check_graph(graph: Any) -> Graph:
-    if not isinstance(graph, Graph):
-        raise TypeError(f"expected a pgo.Graph, found {type(graph).__name__}")
+def _check_graph(graph: Any) -> AnyGraph:
+    if not isinstance(graph, (Graph, Graph3)):
+        raise TypeError(f"expected a pgo.Graph or a pgo.Graph3, found {type(graph).__name__}")
     return graph
 
 
 def solve(
-    graph: Graph,
+    graph: AnyGraph,
     weights: str = "isotropic",
     tol: float = 1e-6,
     method: str = "auto",
     *,
-    solver: str = "ipm",
+    solver: Optional[str] = None,
     max_rank: int = 6,
     staircase_budget: float = 200.0,
     refine: bool = False,
@@ -322,13 +361,26 @@ def solve(
     called certified; ``method``: "auto" (the SDP for components of at most 100 poses, else the
     staircase), "sdp" or "staircase"; ``solver``, ``max_rank``, ``staircase_budget`` (in 10^9
     multiply-adds) and ``refine`` (Levenberg-Marquardt under the full information matrices after
-    certification) are pgo-solve's flags of the same names. Each connected component is solved
-    on its own.
+    certification) are pgo-solve's flags of the same names (``solver``: "ipm", the default, or
+    "clarabel"). Each connected component is solved on its own.
 
-    Returns a :class:`Solution`: ``poses`` (n, 3) and the report's fields. Raises
-    :class:`PgoError` for what the library refuses (e.g. two FIX poses in one component).
+    A :class:`Graph3` is solved as ``pgo-solve`` solves a 3D file: SE-Sync's problem (weights
+    tau = 3/tr(inv(Omega_tt)), kappa = 3/(2 tr(inv(Omega_RR))), or "unit") by the staircase on
+    St(3, p)^n, certified by the certificate matrix S; ``method="sdp"`` and ``refine`` on a TORO
+    file are refused (:class:`PgoError`, the library's message); a ``solver`` given has no
+    effect (a RuntimeWarning says so, as pgo-solve's warning does).
+
+    Returns a :class:`Solution`: ``poses`` ((n, 3); (n, 7) or (n, 6) in 3D) and the report's
+    fields. Raises :class:`PgoError` for what the library refuses (e.g. two FIX poses in one
+    component).
     """
     _check_graph(graph)
+    if isinstance(graph, Graph3) and solver is not None:
+        warnings.warn(
+            "solver had no effect: 3D graphs are solved by the staircase",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     report, poses, landmarks = _pgo.solve(
         graph,
         weights=weights,
@@ -343,7 +395,7 @@ def solve(
 
 
 def certify(
-    graph: Graph,
+    graph: AnyGraph,
     poses: Union[np.ndarray, Solution, None] = None,
     landmarks: Optional[np.ndarray] = None,
     *,
@@ -360,6 +412,10 @@ def certify(
     certify it within ``tol``, the optimum's proven bound is reported: the bound always holds.
     The cost is pgo's objective f under ``weights``, not g2o's chi2 (reported beside it): an
     optimum of chi2 (GTSAM's, g2o's) is certified only to within a small relative bound.
+
+    Of a :class:`Graph3`: ``poses`` is (n, 7) ``x y z qx qy qz qw`` for a g2o graph, (n, 6)
+    ``x y z roll pitch yaw`` for a TORO one (its :class:`Solution`, or None for the file's own
+    poses), certified as ``pgo-certify`` certifies a 3D estimate; ``landmarks`` must be None.
     """
     _check_graph(graph)
     if isinstance(poses, Solution):
@@ -367,11 +423,11 @@ def certify(
             landmarks = poses.landmarks
         poses = poses.poses
     report = _pgo.certify(graph, poses, landmarks, weights=weights, tol=float(tol))
-    return Certificate(json.loads(report), float(tol))
+    return Certificate(json.loads(report), float(tol), graph.dimension)
 
 
 def spectrum(
-    graph: Graph,
+    graph: AnyGraph,
     k: int = 0,
     *,
     weights: str = "isotropic",
@@ -384,20 +440,23 @@ def spectrum(
     certificate allows it (fast), else dense (the dual SDP: cubic in the poses; MIT with k=0
     takes about 30 s). A warning is issued for a component whose eigenvalue iteration did not
     converge (its eigenvalues are then upper bounds).
+
+    Of a :class:`Graph3`: each component is solved as by :func:`solve`, then the ``k`` smallest
+    eigenvalues (10 with 0, at most 100) of Q, S and M are computed sparse, as
+    ``pgo-spectrum -k K`` does for a 3D file; ``solver`` is not used.
     """
     _check_graph(graph)
     if isinstance(k, bool) or int(k) != k or k < 0:
         raise ValueError(f"k must be an integer >= 0, found {k!r}")
-    report = json.loads(_pgo.spectrum(graph, int(k), weights=weights, solver=solver))
-    for c in report["components"]:
-        if not c.get("eigen_converged", True):
-            warnings.warn(
-                f"the eigenvalue iteration of the component of pose {c['first_id']} did not "
-                "converge; its eigenvalues are upper bounds",
-                RuntimeWarning,
-                stacklevel=2,
-            )
-    return Spectrum(report)
+    text, unconverged = _pgo.spectrum(graph, int(k), weights=weights, solver=solver)
+    for first_id in unconverged:
+        warnings.warn(
+            f"the eigenvalue iteration of the component of pose {first_id} did not "
+            "converge; its eigenvalues are upper bounds",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return Spectrum(json.loads(text))
 
 
 

@@ -1,5 +1,5 @@
 """Type stubs of the extension module pgo._pgo (python/src/lib.rs). Use it through ``pgo``:
-``pgo.Graph``, ``pgo.read``, ``pgo.solve``, ``pgo.certify``, ``pgo.spectrum``."""
+``pgo.Graph``, ``pgo.Graph3``, ``pgo.read``, ``pgo.solve``, ``pgo.certify``, ``pgo.spectrum``."""
 
 import os
 from typing import List, Optional, Tuple, Union
@@ -74,6 +74,9 @@ class Graph:
     def observation_information(self) -> npt.NDArray[np.float64]:
         """(o, 3) I11 I12 I22."""
     @property
+    def dimension(self) -> int:
+        """2."""
+    @property
     def num_poses(self) -> int: ...
     @property
     def num_edges(self) -> int: ...
@@ -96,6 +99,54 @@ class Graph:
     def to_text(self, format: Optional[str] = None, dialect: Optional[str] = None) -> str: ...
     def __eq__(self, other: object) -> bool: ...
 
+class Graph3:
+    """A 3D pose graph (see ``pgo.Graph3.__doc__``); ``pgo.read`` returns one for a 3D file."""
+
+    @property
+    def poses(self) -> npt.NDArray[np.float64]:
+        """(n, 7) x y z qx qy qz qw (g2o) or (n, 6) x y z roll pitch yaw (TORO), as read."""
+    @property
+    def ids(self) -> npt.NDArray[np.int64]:
+        """(n,) vertex ids, ascending."""
+    @property
+    def edges(self) -> npt.NDArray[np.int64]:
+        """(m, 2) vertex ids (i, j), file order."""
+    @property
+    def edge_indices(self) -> npt.NDArray[np.int64]:
+        """(m, 2) row indices into ``poses``."""
+    @property
+    def measurements(self) -> npt.NDArray[np.float64]:
+        """(m, 7) or (m, 6), as ``poses``."""
+    @property
+    def information(self) -> npt.NDArray[np.float64]:
+        """(m, 21) information upper triangles, row by row, as in the file."""
+    @property
+    def fixed(self) -> npt.NDArray[np.int64]:
+        """(k,) ids of the FIX poses."""
+    @property
+    def dimension(self) -> int:
+        """3."""
+    @property
+    def num_poses(self) -> int: ...
+    @property
+    def num_edges(self) -> int: ...
+    @property
+    def format(self) -> str:
+        """"g2o" (quaternions) or "toro" (Euler angles)."""
+    @property
+    def dialect(self) -> str:
+        """"g2o" or "toro-info"."""
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def source(self) -> str: ...
+    def with_poses(self, poses: ArrayLike) -> Graph3: ...
+    def write(
+        self, path: PathLike, format: Optional[str] = None, dialect: Optional[str] = None
+    ) -> None: ...
+    def to_text(self, format: Optional[str] = None, dialect: Optional[str] = None) -> str: ...
+    def __eq__(self, other: object) -> bool: ...
+
 def read_path(
     path: PathLike,
     format: Optional[str] = None,
@@ -103,7 +154,7 @@ def read_path(
     strict: bool = False,
     ignore_equiv: bool = False,
     allow_indefinite: bool = False,
-) -> Graph: ...
+) -> Union[Graph, Graph3]: ...
 def read_bytes(
     data: bytes,
     name: str = "<string>",
@@ -112,22 +163,24 @@ def read_bytes(
     strict: bool = False,
     ignore_equiv: bool = False,
     allow_indefinite: bool = False,
-) -> Graph: ...
+) -> Union[Graph, Graph3]: ...
 def solve(
-    graph: Graph,
+    graph: Union[Graph, Graph3],
     weights: str = "isotropic",
     tol: float = 1e-6,
     method: str = "auto",
-    solver: str = "ipm",
+    solver: Optional[str] = None,
     max_rank: int = 6,
     staircase_budget: float = 200.0,
     refine: bool = False,
 ) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 def certify(
-    graph: Graph,
+    graph: Union[Graph, Graph3],
     poses: Optional[ArrayLike] = None,
     landmarks: Optional[ArrayLike] = None,
     weights: str = "isotropic",
     tol: float = 1e-6,
 ) -> str: ...
-def spectrum(graph: Graph, k: int = 0, weights: str = "isotropic", solver: str = "ipm") -> str: ...
+def spectrum(
+    graph: Union[Graph, Graph3], k: int = 0, weights: str = "isotropic", solver: str = "ipm"
+) -> Tuple[str, List[int]]: ...

@@ -30,6 +30,14 @@ from . import Graph
 __all__ = ["to_gtsam", "from_gtsam"]
 
 
+def _check_planar(graph: Any, name: str) -> None:
+    if not isinstance(graph, Graph):
+        raise TypeError(
+            f"{name}: expected a planar pgo.Graph, found {type(graph).__name__} "
+            "(3D graphs are not bridged to GTSAM yet)"
+        )
+
+
 def to_gtsam(graph: Graph, prior_sigma: Optional[float] = None) -> Tuple[Any, Any]:
     """``(gtsam.NonlinearFactorGraph, gtsam.Values)`` of ``graph``: a ``BetweenFactorPose2`` per
     edge (keys = vertex ids, measurement (dx, dy, dtheta), ``noiseModel.Gaussian.Information`` of
@@ -41,6 +49,7 @@ def to_gtsam(graph: Graph, prior_sigma: Optional[float] = None) -> Tuple[Any, An
     keep it, so it adds nothing to the error at pgo's estimates. Graphs with landmarks are
     refused (GTSAM's Python API has no factor for pgo's (dx, dy) observations).
     """
+    _check_planar(graph, "to_gtsam")
     if len(graph.landmark_ids):
         raise NotImplementedError("to_gtsam: graphs with landmarks are not bridged")
     factors = _gtsam.NonlinearFactorGraph()
@@ -71,6 +80,7 @@ def from_gtsam(graph: Graph, values: Any) -> np.ndarray:
     """The poses of ``values`` (a ``gtsam.Values`` holding a ``Pose2`` for each vertex id of
     ``graph``) as an (n, 3) float64 array (x, y, theta) in the order of ``graph.ids``: what
     :func:`pgo.certify` and ``Graph.with_poses`` take."""
+    _check_planar(graph, "from_gtsam")
     out = np.empty((graph.num_poses, 3), dtype=np.float64)
     for row, key in enumerate(graph.ids):
         if not values.exists(int(key)):

@@ -1,17 +1,20 @@
-//! The extension module `pgo._pgo` of the Python package `pgo`: the pose graph as a Python class
-//! over the library's [`PoseGraph`], and one call each into the library's jobs (read, write,
-//! [`pgo::solve`], [`pgo::certify_estimate`], [`pgo::spectrum::spectrum`]). The reports are the
-//! tools' own `--json` reports, built by the same code (`pgo::cli::{solve, certify, spectrum}`)
-//! and handed to Python as JSON text; `pgo/__init__.py` wraps them in classes. No orchestration
-//! here: everything a tool decides, the library decides.
+//! The extension module `pgo._pgo` of the Python package `pgo`: the pose graphs as Python classes
+//! over the library's [`PoseGraph`] (planar) and [`pgo::graph3::Graph3`] (3D), and one call each
+//! into the library's jobs (read, write, [`pgo::solve`] / [`pgo::solve::solve3`],
+//! [`pgo::certify_estimate`] / [`pgo::solve::certify_estimate3`], [`pgo::spectrum::spectrum`] /
+//! [`pgo::spectrum::spectrum3`]), chosen by the graph's dimension as the tools choose them. The
+//! reports are the tools' own `--json` reports, built by the same code
+//! (`pgo::cli::{solve, certify, spectrum}`) and handed to Python as JSON text; `pgo/__init__.py`
+//! wraps them in classes. No orchestration here: everything a tool decides, the library decides.
 
 use numpy::ndarray::ArrayViewD;
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLikeDyn, PyArrayMethods};
 use pgo::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
-use pgo::io::{self, Dialect, Format, ReadOptions, ReadReport, WriteOptions};
+use pgo::graph3::{Form3, Pose3, Rotation3};
+use pgo::io::{self, AnyGraph, Dialect, Format, ReadOptions, ReadReport, WriteOptions};
 use pgo::vertigo::Vertigo;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -454,6 +457,12 @@ impl Graph {
         float_array(py, obs.iter().flat_map(|o| o.information.0).collect(), 3)
     }
 
+    /// 2: a planar graph (`pgo.Graph3` is 3D).
+    #[getter]
+    fn dimension(&self) -> u8 {
+        2
+    }
+
     /// Number of poses.
     #[getter]
     fn num_poses(&self) -> usize {
@@ -647,6 +656,318 @@ impl Graph {
     }
 }
 
+/// The number of values of a pose (and of a measurement) in a 3D graph's form: x y z qx qy qz qw
+/// (g2o) or x y z roll pitch yaw (TORO).
+fn pose_width(form: Form3) -> usize {
+    match form {
+        Form3::G2o => 7,
+        Form3::Toro => 6,
+    }
+}
+
+/// 3D poses from the rows of an (n, 7) or (n, 6) array in the graph's form, with the reader's
+/// check on quaternions (one that cannot be normalized is refused).
+fn poses3(name: &str, a: &ArrayViewD<'_, f64>, form: Form3, n: usize) -> PyResult<Vec<Pose3>> {
+    let rows = matrix(name, a, pose_width(form), Some(n))?;
+    rows.iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let rotation = match form {
+                Form3::G2o => {
+                    let q = [r[3], r[4], r[5], r[6]];
+                    let norm2: f64 = q.iter().map(|x| x * x).sum();
+                    if !(norm2 > 0.0 && norm2.is_finite()) {
+                        return Err(invalid(format!(
+                            "{name}[{k}]: the quaternion ({:?}, {:?}, {:?}, {:?}) cannot be normalized",
+                            q[0], q[1], q[2], q[3]
+                        )));
+                    }
+                    Rotation3::Quaternion(q)
+                }
+                Form3::Toro => Rotation3::Euler([r[3], r[4], r[5]]),
+            };
+            Ok(Pose3 {
+                translation: [r[0], r[1], r[2]],
+                rotation,
+            })
+        })
+        .collect()
+}
+
+/// A 3D pose graph (g2o `VERTEX_SE3:QUAT`/`EDGE_SE3:QUAT` or TORO `VERTEX3`/`EDGE3`): poses in
+/// SE(3) with ids, relative-pose edges with 6x6 information matrices, FIX ids; `pgo.read`
+/// returns one for a 3D file. Every value is kept as read and written back bit for bit.
+///
+/// The rotations are in the file's form (`format`): g2o quaternions, a pose or measurement row
+/// being `x y z qx qy qz qw` (7 columns, Hamilton, w last, not necessarily of unit norm: the
+/// rotation is q/|q|), or TORO Euler angles, `x y z roll pitch yaw` (6 columns). The information
+/// matrices are (m, 21) upper triangles row by row over the file's coordinates (x y z qx qy qz,
+/// or x y z roll pitch yaw). The two forms are not converted into each other (not lossless).
+///
+/// A Graph3 is immutable: its array attributes are copies. `with_poses` gives a graph with
+/// another estimate. There is no constructor from arrays yet: read a file or its text.
+#[pyclass(module = "pgo", name = "Graph3", frozen)]
+pub struct Graph3 {
+    graph: pgo::graph3::Graph3,
+    format: Format,
+    dialect: Dialect,
+    warnings: Vec<String>,
+    /// Where it came from: a path or "<string>".
+    source: String,
+}
+
+impl Graph3 {
+    fn from_read(graph: pgo::graph3::Graph3, report: ReadReport, source: String) -> Self {
+        Graph3 {
+            graph,
+            format: report.format,
+            dialect: report.dialect,
+            warnings: report.warnings.iter().map(|w| w.to_string()).collect(),
+            source,
+        }
+    }
+
+    fn width(&self) -> usize {
+        pose_width(self.graph.form)
+    }
+
+    /// The format and dialect of an output: `format` (else the extension of `path`, else the
+    /// format it was read in) and `dialect`, which must be the format's own (pgo-convert's
+    /// check).
+    fn output(
+        &self,
+        path: Option<&str>,
+        format: Option<&str>,
+        dialect: Option<&str>,
+    ) -> PyResult<(Format, Dialect)> {
+        let format = match format {
+            Some(f) => choice::<Format>("format", f)?,
+            None => path.and_then(Format::from_extension).unwrap_or(self.format),
+        };
+        let requested = dialect
+            .map(|d| choice::<Dialect>("dialect", d))
+            .transpose()?;
+        let dialect =
+            pgo::cli::convert::dialect3(format, requested, "dialect").map_err(invalid_of)?;
+        Ok((format, dialect))
+    }
+}
+
+/// A library error that carries no place or path, as a [`PgoError`].
+fn invalid_of(e: pgo::Error) -> PyErr {
+    PgoError::new_err(e.to_string())
+}
+
+#[pymethods]
+impl Graph3 {
+    /// The estimate: (n, 7) float64 `x y z qx qy qz qw` per pose for a g2o graph, (n, 6)
+    /// `x y z roll pitch yaw` for a TORO one, exactly as read, in ascending id order.
+    #[getter]
+    fn poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self.graph.poses.iter().flat_map(|p| p.values()).collect();
+        float_array(py, v, self.width())
+    }
+
+    /// The poses' vertex ids: (n,) int64, ascending.
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        PyArray1::from_vec(py, self.graph.ids.iter().map(|&i| i64::from(i)).collect())
+    }
+
+    /// The edges as vertex ids: (m, 2) int64 (i, j) in file order; an edge measures the pose of
+    /// j in the frame of i.
+    #[getter]
+    fn edges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let ids = &self.graph.ids;
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| [i64::from(ids[e.i]), i64::from(ids[e.j])])
+            .collect();
+        id_array(py, v, 2)
+    }
+
+    /// The edges as row indices into `poses`: (m, 2) int64.
+    #[getter]
+    fn edge_indices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| [e.i as i64, e.j as i64])
+            .collect();
+        id_array(py, v, 2)
+    }
+
+    /// The measurements: (m, 7) float64 `x y z qx qy qz qw` (g2o) or (m, 6)
+    /// `x y z roll pitch yaw` (TORO), the pose of j in the frame of i, exactly as read.
+    #[getter]
+    fn measurements<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| e.measurement.values())
+            .collect();
+        float_array(py, v, self.width())
+    }
+
+    /// The information matrices: (m, 21) float64, the upper triangle row by row as the file
+    /// holds it (I11 I12 ... I16 I22 ... I66), over x y z qx qy qz (g2o) or x y z roll pitch
+    /// yaw (TORO).
+    #[getter]
+    fn information<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let v = self
+            .graph
+            .edges
+            .iter()
+            .flat_map(|e| e.information.0)
+            .collect();
+        float_array(py, v, 21)
+    }
+
+    /// The fixed poses' ids (FIX lines), in the order of the FIX lines: (k,) int64.
+    #[getter]
+    fn fixed<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let ids = &self.graph.ids;
+        PyArray1::from_vec(
+            py,
+            self.graph
+                .fixed
+                .iter()
+                .map(|&k| i64::from(ids[k]))
+                .collect(),
+        )
+    }
+
+    /// 3: a 3D graph (`pgo.Graph` is planar).
+    #[getter]
+    fn dimension(&self) -> u8 {
+        3
+    }
+
+    /// Number of poses.
+    #[getter]
+    fn num_poses(&self) -> usize {
+        self.graph.num_poses()
+    }
+
+    /// Number of edges.
+    #[getter]
+    fn num_edges(&self) -> usize {
+        self.graph.edges.len()
+    }
+
+    /// The file format it was read in, which is also the form of its rotations: "g2o"
+    /// (quaternions) or "toro" (Euler angles).
+    #[getter]
+    fn format(&self) -> &'static str {
+        self.format.name()
+    }
+
+    /// How the file's noise values were read: "g2o" or "toro-info" (3D files hold information
+    /// matrices).
+    #[getter]
+    fn dialect(&self) -> &'static str {
+        self.dialect.name()
+    }
+
+    /// The reader's warnings (`PATH:LINE:COL: warning: ...`, e.g. skipped unknown tags).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// Where the graph came from: its path, or "<string>" for text.
+    #[getter]
+    fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// This graph with another estimate: `poses` (n, 7) for a g2o graph or (n, 6) for a TORO
+    /// one, in the order of `ids` (quaternions that cannot be normalized are refused). What
+    /// `pgo-solve -o` writes is `graph.with_poses(solution.poses)`.
+    fn with_poses(&self, poses: PyArrayLikeDyn<'_, f64, AllowTypeChange>) -> PyResult<Self> {
+        let mut graph = self.graph.clone();
+        graph.poses = poses3("poses", &poses.as_array(), graph.form, graph.num_poses())?;
+        Ok(Graph3 {
+            graph,
+            format: self.format,
+            dialect: self.dialect,
+            warnings: self.warnings.clone(),
+            source: self.source.clone(),
+        })
+    }
+
+    /// Writes the graph to `path` as pgo-convert does: in its own form only (`format` "g2o" for
+    /// a g2o graph, "toro" for a TORO one; default: from the extension, .g2o or .graph, else the
+    /// format it was read in; the other form is refused with pgo-convert's message), `dialect`
+    /// the format's own (information matrices); vertices sorted by id, edges in input order,
+    /// FIX last, shortest round-trip numbers: every value read back bit for bit. Atomic: a
+    /// temporary file in the same directory renamed over `path` when complete.
+    #[pyo3(signature = (path, format=None, dialect=None))]
+    fn write(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        format: Option<&str>,
+        dialect: Option<&str>,
+    ) -> PyResult<()> {
+        let path = path_str(&path)?;
+        if path == "-" {
+            return Err(invalid(
+                "write: give a file path (to_text() returns the file's text)",
+            ));
+        }
+        let (format, _) = self.output(Some(path), format, dialect)?;
+        let graph = &self.graph;
+        py.detach(|| io::write3_path(graph, format, path))
+            .map_err(|e| io_to_py(py, e))
+    }
+
+    /// The graph as the text of a file in `format` (default: the format it was read in) and
+    /// `dialect`, exactly the bytes `write` writes.
+    #[pyo3(signature = (format=None, dialect=None))]
+    fn to_text(
+        &self,
+        py: Python<'_>,
+        format: Option<&str>,
+        dialect: Option<&str>,
+    ) -> PyResult<String> {
+        let (format, _) = self.output(None, format, dialect)?;
+        let mut bytes = Vec::new();
+        io::write3(&self.graph, format, &mut bytes).map_err(|e| io_to_py(py, e))?;
+        String::from_utf8(bytes).map_err(|e| invalid(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        let g = &self.graph;
+        format!(
+            "<pgo.Graph3: {} poses, {} edges, 3D{}, {} (dialect {}), from {}>",
+            g.num_poses(),
+            g.edges.len(),
+            if g.fixed.is_empty() {
+                String::new()
+            } else {
+                format!(", {} fixed", g.fixed.len())
+            },
+            self.format.name(),
+            self.dialect.name(),
+            self.source
+        )
+    }
+
+    /// Whether two 3D graphs hold the same poses, ids, edges, information matrices and fixed
+    /// poses, in the same form (format, dialect, warnings and source aside).
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        match other.cast::<Graph3>() {
+            Ok(o) => self.graph == o.get().graph,
+            Err(_) => false,
+        }
+    }
+}
+
 fn read_options(
     format: Option<&str>,
     dialect: Option<&str>,
@@ -665,7 +986,25 @@ fn read_options(
     })
 }
 
-/// Reads the graph file at `path` (pgo.read's path branch).
+/// A graph read from a file, planar or 3D, as the Python object of its class.
+fn graph_object(
+    py: Python<'_>,
+    graph: AnyGraph,
+    report: ReadReport,
+    source: String,
+) -> PyResult<Py<PyAny>> {
+    Ok(match graph {
+        AnyGraph::Planar(g) => Bound::new(py, Graph::from_read(g, report, source))?
+            .into_any()
+            .unbind(),
+        AnyGraph::Spatial(g) => Bound::new(py, Graph3::from_read(g, report, source))?
+            .into_any()
+            .unbind(),
+    })
+}
+
+/// Reads the graph file at `path` (pgo.read's path branch): a `Graph`, or a `Graph3` for a 3D
+/// file, as the tools read them.
 #[pyfunction]
 #[pyo3(signature = (path, format=None, dialect=None, strict=false, ignore_equiv=false, allow_indefinite=false))]
 fn read_path(
@@ -676,20 +1015,20 @@ fn read_path(
     strict: bool,
     ignore_equiv: bool,
     allow_indefinite: bool,
-) -> PyResult<Graph> {
+) -> PyResult<Py<PyAny>> {
     let options = read_options(format, dialect, strict, ignore_equiv, allow_indefinite)?;
     let path = path_str(&path)?;
     if path == "-" {
         return Err(invalid("read: give a path or the text of a file, not '-'"));
     }
     let (graph, report) = py
-        .detach(|| io::read_path(path, &options))
+        .detach(|| io::read_any_path(path, &options))
         .map_err(|e| io_to_py(py, e))?;
-    Ok(Graph::from_read(graph, report, path.to_string()))
+    graph_object(py, graph, report, path.to_string())
 }
 
-/// Reads a graph from the bytes of a file (pgo.read's text branch); `name` is the path its
-/// errors name.
+/// Reads a graph from the bytes of a file (pgo.read's text branch): a `Graph`, or a `Graph3`
+/// for a 3D file; `name` is the path its errors name.
 #[pyfunction]
 #[pyo3(signature = (data, name="<string>", format=None, dialect=None, strict=false, ignore_equiv=false, allow_indefinite=false))]
 #[allow(clippy::too_many_arguments)]
@@ -702,12 +1041,12 @@ fn read_bytes(
     strict: bool,
     ignore_equiv: bool,
     allow_indefinite: bool,
-) -> PyResult<Graph> {
+) -> PyResult<Py<PyAny>> {
     let options = read_options(format, dialect, strict, ignore_equiv, allow_indefinite)?;
     let (graph, report) = py
-        .detach(|| io::read(data, name, &options))
+        .detach(|| io::read_any(data, name, &options))
         .map_err(|e| io_to_py(py, e))?;
-    Ok(Graph::from_read(graph, report, name.to_string()))
+    graph_object(py, graph, report, name.to_string())
 }
 
 fn check_tolerance(tol: f64) -> PyResult<()> {
@@ -720,18 +1059,39 @@ fn check_tolerance(tol: f64) -> PyResult<()> {
     }
 }
 
+/// The graph a job is asked of: a planar `Graph` or a 3D `Graph3`.
+enum AnyRef<'a> {
+    Planar(&'a Graph),
+    Spatial(&'a Graph3),
+}
+
+fn any_graph<'a>(graph: &'a Bound<'_, PyAny>) -> PyResult<AnyRef<'a>> {
+    if let Ok(g) = graph.cast::<Graph>() {
+        Ok(AnyRef::Planar(g.get()))
+    } else if let Ok(g) = graph.cast::<Graph3>() {
+        Ok(AnyRef::Spatial(g.get()))
+    } else {
+        Err(PyTypeError::new_err(format!(
+            "expected a pgo.Graph or a pgo.Graph3, found {}",
+            graph.get_type().name()?
+        )))
+    }
+}
+
 /// Solves the graph (pgo.solve): the `pgo-solve --json --no-timings` report as JSON text, the
-/// estimate (n, 3) and the landmark positions (L, 2).
+/// estimate ((n, 3) planar; (n, 7) or (n, 6) 3D, in the graph's form) and the landmark positions
+/// ((L, 2); (0, 3) for a 3D graph). 3D graphs are solved by [`pgo::solve::solve3`], which refuses
+/// what does not apply to them (method "sdp", refine on a TORO file); `solver` is then not used.
 #[pyfunction]
-#[pyo3(signature = (graph, weights="isotropic", tol=1e-6, method="auto", solver="ipm", max_rank=6, staircase_budget=200.0, refine=false))]
+#[pyo3(signature = (graph, weights="isotropic", tol=1e-6, method="auto", solver=None, max_rank=6, staircase_budget=200.0, refine=false))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn solve<'py>(
     py: Python<'py>,
-    graph: &Bound<'py, Graph>,
+    graph: &Bound<'py, PyAny>,
     weights: &str,
     tol: f64,
     method: &str,
-    solver: &str,
+    solver: Option<&str>,
     max_rank: usize,
     staircase_budget: f64,
     refine: bool,
@@ -749,14 +1109,29 @@ fn solve<'py>(
     }
     let options = pgo::SolveOptions {
         method: choice("method", method)?,
-        solver: choice("solver", solver)?,
+        solver: choice("solver", solver.unwrap_or("ipm"))?,
         weights: choice("weights", weights)?,
         tolerance: tol,
         refine,
         max_rank,
         staircase_budget: staircase_budget * 1e9,
     };
-    let g = graph.get();
+    let g = match any_graph(graph)? {
+        AnyRef::Planar(g) => g,
+        AnyRef::Spatial(g) => {
+            let solution = py
+                .detach(|| pgo::solve::solve3(&g.graph, &options))
+                .map_err(|e| to_py(py, e))?;
+            let report = pgo::cli::solve::Report3::new(&solution, g.warnings.clone(), None);
+            let json = pgo::cli::common::to_json_line(&report).map_err(|e| to_py(py, e))?;
+            let poses = solution.estimate.iter().flat_map(|p| p.values()).collect();
+            return Ok((
+                json,
+                float_array(py, poses, g.width())?,
+                float_array(py, Vec::new(), 3)?,
+            ));
+        }
+    };
     let solution = py
         .detach(|| pgo::solve(&g.graph, &options))
         .map_err(|e| to_py(py, e))?;
@@ -779,19 +1154,49 @@ fn solve<'py>(
     ))
 }
 
-/// Certifies an estimate (pgo.certify): the `pgo-certify --json` report as JSON text.
+/// Certifies an estimate (pgo.certify): the `pgo-certify --json` report as JSON text. For a 3D
+/// graph, `poses` is (n, 7) or (n, 6) in the graph's form (None: the file's own poses) and
+/// [`pgo::solve::certify_estimate3`] certifies it.
 #[pyfunction]
 #[pyo3(signature = (graph, poses=None, landmarks=None, weights="isotropic", tol=1e-6))]
 fn certify(
     py: Python<'_>,
-    graph: &Bound<'_, Graph>,
+    graph: &Bound<'_, PyAny>,
     poses: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
     landmarks: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
     weights: &str,
     tol: f64,
 ) -> PyResult<String> {
     check_tolerance(tol)?;
-    let g = graph.get();
+    let options = pgo::solve::CertifyOptions {
+        weights: choice("weights", weights)?,
+        tolerance: tol,
+    };
+    let g = match any_graph(graph)? {
+        AnyRef::Planar(g) => g,
+        AnyRef::Spatial(g) => {
+            if landmarks.is_some() {
+                return Err(invalid(
+                    "landmarks: a 3D graph has no landmarks (pass poses only)",
+                ));
+            }
+            let (estimate, source) = match &poses {
+                None => (g.graph.poses.clone(), g.source.as_str()),
+                Some(p) => (
+                    poses3("poses", &p.as_array(), g.graph.form, g.graph.num_poses())?,
+                    "<poses>",
+                ),
+            };
+            let report = py
+                .detach(|| pgo::solve::certify_estimate3(&g.graph, &estimate, &options, source))
+                .map_err(|e| to_py(py, e))?;
+            let json = pgo::cli::certify::JsonReport {
+                report: &report,
+                warnings: g.warnings.clone(),
+            };
+            return pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e));
+        }
+    };
     let n = g.graph.num_poses();
     let marks = &g.graph.landmarks;
     let mut estimate: Vec<Pose2> = match &poses {
@@ -827,10 +1232,6 @@ fn certify(
         }
     };
     estimate.extend(positions.iter().map(|&[x, y]| Pose2::new(x, y, 0.0)));
-    let options = pgo::solve::CertifyOptions {
-        weights: choice("weights", weights)?,
-        tolerance: tol,
-    };
     let source = if poses.is_some() {
         "<poses>"
     } else {
@@ -846,30 +1247,58 @@ fn certify(
     pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))
 }
 
-/// The graph's spectra (pgo.spectrum): the `pgo-spectrum --json` report as JSON text.
+/// The graph's spectra (pgo.spectrum): the `pgo-spectrum --json` report as JSON text, and the
+/// first ids of the components whose eigenvalue iteration did not converge (pgo-spectrum's
+/// warnings). A 3D graph's are [`pgo::spectrum::spectrum3`]'s (`solver` not used).
 #[pyfunction]
 #[pyo3(signature = (graph, k=0, weights="isotropic", solver="ipm"))]
 fn spectrum(
     py: Python<'_>,
-    graph: &Bound<'_, Graph>,
+    graph: &Bound<'_, PyAny>,
     k: usize,
     weights: &str,
     solver: &str,
-) -> PyResult<String> {
+) -> PyResult<(String, Vec<u32>)> {
     let options = pgo::spectrum::SpectrumOptions {
         weights: choice("weights", weights)?,
         count: k,
         solver: choice("solver", solver)?,
     };
-    let g = graph.get();
+    let g = match any_graph(graph)? {
+        AnyRef::Planar(g) => g,
+        AnyRef::Spatial(g) => {
+            let report = py
+                .detach(|| pgo::spectrum::spectrum3(&g.graph, options.weights, k))
+                .map_err(|e| to_py(py, e))?;
+            let unconverged = report
+                .components
+                .iter()
+                .filter(|c| !c.eigen_converged)
+                .map(|c| c.first_id)
+                .collect();
+            let json = pgo::cli::spectrum::JsonReport3 {
+                report: &report,
+                warnings: g.warnings.clone(),
+            };
+            let json = pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))?;
+            return Ok((json, unconverged));
+        }
+    };
     let report = py
         .detach(|| pgo::spectrum::spectrum(&g.graph, &options))
         .map_err(|e| to_py(py, e))?;
+    let unconverged = report
+        .components
+        .iter()
+        .filter(|c| !c.eigen_converged)
+        .map(|c| c.first_id)
+        .collect();
     let json = pgo::cli::spectrum::JsonReport {
         report: &report,
         warnings: g.warnings.clone(),
     };
-    pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))
+    let json = pgo::cli::common::to_json_line(&json).map_err(|e| to_py(py, e))?;
+    Ok((json, unconverged))
 }
 
 /// The extension module of the Python package `pgo` (see pgo/__init__.py).
@@ -877,6 +1306,7 @@ fn spectrum(
 fn _pgo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_class::<Graph>()?;
+    m.add_class::<Graph3>()?;
     m.add_function(wrap_pyfunction!(read_path, m)?)?;
     m.add_function(wrap_pyfunction!(read_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;

@@ -407,14 +407,7 @@ fn run3(
         .and_then(Target::graph_format)
         .or_else(|| Format::from_extension(&args.output))
         .unwrap_or(report.format);
-    let dialect = format.default_dialect();
-    if let Some(d) = args.to_dialect
-        && d != dialect
-    {
-        return Err(Error::Invalid(format!(
-            "--to-dialect {d}: a 3D {format} file holds information matrices, the upper triangle row by row (dialect {dialect})"
-        )));
-    }
+    let dialect = dialect3(format, args.to_dialect, "--to-dialect")?;
     if args.reindex {
         graph.reindex();
     }
@@ -443,6 +436,23 @@ fn run3(
     }
     rec.finish()?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The dialect a 3D graph is written in, `format`'s own (information matrices, the upper
+/// triangle row by row): `requested` (given by the option `option`) must be that one. The Python
+/// package's `Graph3.write` refuses what pgo-convert refuses through this too.
+pub fn dialect3(
+    format: Format,
+    requested: Option<Dialect>,
+    option: &str,
+) -> crate::Result<Dialect> {
+    let dialect = format.default_dialect();
+    match requested {
+        Some(d) if d != dialect => Err(Error::Invalid(format!(
+            "{option} {d}: a 3D {format} file holds information matrices, the upper triangle row by row (dialect {dialect})"
+        ))),
+        _ => Ok(dialect),
+    }
 }
 
 /// The human-readable statistics of a 3D graph, laid out as [`stats_text`]'s.

@@ -588,6 +588,30 @@ pub struct Report3<'a> {
     pub timings: Option<Timings>,
 }
 
+impl<'a> Report3<'a> {
+    /// The report of a 3D `solution` as `--json` prints it (the Python package's `Solution` of
+    /// a 3D graph is this report too, built by this function, without timings).
+    pub fn new(
+        solution: &'a crate::solve::Solution3,
+        warnings: Vec<String>,
+        timings: Option<Timings>,
+    ) -> Self {
+        let refined = solution.refined_chi2.is_some();
+        Report3 {
+            solution,
+            written_estimate: if refined { "refined" } else { "solved" },
+            written_chi2: if refined {
+                solution.refined_chi2
+            } else {
+                solution.chi2
+            },
+            written_certified: !refined && solution.certified,
+            warnings,
+            timings,
+        }
+    }
+}
+
 /// The rest of [`run`] for a 3D graph: [`crate::solve::solve3`], the report, the estimate
 /// written in the graph's own form.
 fn run3(
@@ -647,24 +671,16 @@ fn run3(
             "pgo-solve: warning: --solver had no effect: 3D graphs are solved by the staircase"
         );
     }
-    let refined = solution.refined_chi2.is_some();
-    let report = Report3 {
-        solution: &solution,
-        written_estimate: if refined { "refined" } else { "solved" },
-        written_chi2: if refined {
-            solution.refined_chi2
-        } else {
-            solution.chi2
-        },
-        written_certified: !refined && solution.certified,
-        warnings: read_report.warnings.iter().map(|w| w.to_string()).collect(),
-        timings: (!args.no_timings).then_some(Timings {
+    let report = Report3::new(
+        &solution,
+        read_report.warnings.iter().map(|w| w.to_string()).collect(),
+        (!args.no_timings).then_some(Timings {
             read_s,
             solve_s,
             write_s,
             marginals_s: None,
         }),
-    };
+    );
     if args.json {
         write_stdout(to_json_line(&report)?.as_bytes())?;
     } else {

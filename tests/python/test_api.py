@@ -31,9 +31,10 @@ def test_stubs_match_the_extension():
     classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
     defined = {n for n in dir(ext) if not n.startswith("_") and n != "VERSION"}
     assert functions | set(classes) == defined
-    graph_stub = {n.name for n in classes["Graph"].body if isinstance(n, ast.FunctionDef)}
-    graph_real = {n for n in dir(ext.Graph) if not n.startswith("_")}
-    assert graph_real <= graph_stub
+    for cls in ("Graph", "Graph3"):
+        stub = {n.name for n in classes[cls].body if isinstance(n, ast.FunctionDef)}
+        real = {n for n in dir(getattr(ext, cls)) if not n.startswith("_")}
+        assert real <= stub, cls
     for fn in functions:
         stub = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == fn)
         stub_args = [a.arg for a in stub.args.args + stub.args.kwonlyargs]
@@ -51,7 +52,8 @@ USAGE = """\
 import numpy as np
 import pgo
 
-graph: pgo.Graph = pgo.read("MIT.g2o")
+graph: pgo.AnyGraph = pgo.read("MIT.g2o")
+planar: pgo.Graph = pgo.Graph(np.zeros((1, 3)), [], [])
 solution = pgo.solve(graph, weights="unit", tol=1e-6)
 poses: np.ndarray = solution.poses
 certificate = pgo.certify(graph, solution.poses)
@@ -59,6 +61,11 @@ ok: bool = certificate.certified
 eigenvalues: np.ndarray = pgo.spectrum(graph, 3).eigenvalues
 graph.with_poses(poses).write("out.g2o", format="toro")
 built = pgo.Graph(np.zeros((2, 3)), [[0, 1]], [[1.0, 0.0, 0.0]], fixed=[0])
+three = pgo.read("grid3D.g2o")
+if isinstance(three, pgo.Graph3):
+    rows: np.ndarray = three.information
+    three.with_poses(pgo.solve(three).poses).write("grid3D-opt.g2o")
+    dimension: int = pgo.certify(three).dimension + pgo.spectrum(three, 4).near_zero
 try:
     pgo.read("x.g2o")
 except pgo.ParseError as e:

@@ -154,3 +154,11 @@ def test_landmarks_and_missing_keys_are_refused():
     graph = pgo.read(DATASETS / "paper_toy.g2o")
     with pytest.raises(KeyError):
         pgo.gtsam.from_gtsam(graph, gtsam.Values())
+
+
+def test_three_d_graphs_are_not_bridged():
+    g = pgo.read("VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n")
+    with pytest.raises(TypeError, match="3D graphs are not bridged"):
+        pgo.gtsam.to_gtsam(g)
+    with pytest.raises(TypeError, match="3D graphs are not bridged"):
+        pgo.gtsam.from_gtsam(g, gtsam.Values())

@@ -239,9 +239,13 @@ def test_reader_warnings_are_warnings():
         pgo.read(text, strict=True)
 
 
-def test_three_d_files_are_refused_with_their_place():
-    text = "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n"
+def test_three_d_files_are_read_as_graph3():
+    # A 3D tag gives a pgo.Graph3 (tests/python/test_three_d.py), not an error.
+    g = pgo.read("VERTEX_SE3:QUAT 0 1 2 3 0 0 0 1\n")
+    assert isinstance(g, pgo.Graph3) and g.dimension == 3
+    assert g.poses.tolist() == [[1, 2, 3, 0, 0, 0, 1]] and g.num_edges == 0
+    # Other 3D types are still refused, at their place.
     with pytest.raises(pgo.ParseError) as e:
-        pgo.read(text)
-    assert (e.value.line, e.value.column) == (1, 1)
+        pgo.read("VERTEX_SE2 0 0 0 0\nEDGE_SE3_PRIOR 0 0 0 0\n")
+    assert (e.value.line, e.value.column) == (2, 1)
     assert "3D" in str(e.value)

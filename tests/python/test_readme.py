@@ -1,6 +1,6 @@
 """The Python blocks of the README's section "Python", run in order in one namespace from a
 directory holding the bundled data sets (as from the repository root), with matplotlib's Agg
-backend; each `<pgo....>` line they print must be the one the README shows in the comment after
+backend and $DATA the public data sets; each `<pgo....>` line they print must be the one the README shows in the comment after
 it (a comment of `# <...` continued by `#  ...` lines)."""
 
 import contextlib
@@ -30,12 +30,13 @@ def shown_reprs(code):
     return shown
 
 
-def test_readme_python_blocks_run_and_print_what_they_show(tmp_path, monkeypatch):
+def test_readme_python_blocks_run_and_print_what_they_show(tmp_path, monkeypatch, shared_datasets):
     pytest.importorskip("matplotlib")
     pytest.importorskip("gtsam")
     blocks = python_blocks()
     assert len(blocks) >= 2
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setenv("DATA", str(shared_datasets))
     (tmp_path / "datasets").symlink_to(REPO_ROOT / "datasets")
     monkeypatch.chdir(tmp_path)
     namespace = {}
@@ -47,3 +48,4 @@ def test_readme_python_blocks_run_and_print_what_they_show(tmp_path, monkeypatch
         assert printed == shown_reprs(code)
     assert (tmp_path / "MIT.png").stat().st_size > 10_000
     assert (tmp_path / "MIT-opt.g2o").is_file()
+    assert (tmp_path / "smallGrid3D-opt.g2o").is_file()
