@@ -714,7 +714,6 @@ fn text_report3(input: &str, report: &Report3) -> String {
             .max()
             .unwrap_or(3),
     );
-    let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     out += &row("cost", num(r.cost));
     out += &row(
         "chi2 (g2o)",
@@ -738,25 +737,12 @@ fn text_report3(input: &str, report: &Report3) -> String {
             "not shown".to_string()
         },
     );
-    for (k, c) in r.components.iter().enumerate() {
-        if r.components.len() > 1 {
-            out += &row(
-                &format!("component {}", k + 1),
-                format!(
-                    "{} poses from id {}: cost {}, bound {}, {}",
-                    c.poses,
-                    c.first_id,
-                    num(c.cost),
-                    num(c.lower_bound),
-                    if c.certified {
-                        "certified"
-                    } else {
-                        "not certified"
-                    }
-                ),
-            );
-        }
-    }
+    out += &component_rows(
+        &r.components
+            .iter()
+            .map(|c| (c.poses, c.first_id, c.cost, c.lower_bound, c.certified))
+            .collect::<Vec<_>>(),
+    );
     out += &row(
         "result",
         if r.certified && r.refined_chi2.is_some() {
@@ -796,6 +782,36 @@ fn text_report3(input: &str, report: &Report3) -> String {
             format!(
                 "read {:.3} s, solve {:.3} s, write {:.3} s",
                 t.read_s, t.solve_s, t.write_s
+            ),
+        );
+    }
+    out
+}
+
+/// A row of the text report: the label in a column of 21, the value.
+fn row(label: &str, value: String) -> String {
+    format!("  {label:<21}{value}\n")
+}
+
+/// One row per connected component (poses, first id, cost, bound, certified), when there are
+/// several: the planar and the 3D text reports.
+fn component_rows(components: &[(usize, u32, f64, f64, bool)]) -> String {
+    let mut out = String::new();
+    if components.len() < 2 {
+        return out;
+    }
+    for (k, &(poses, first_id, cost, lower_bound, certified)) in components.iter().enumerate() {
+        out += &row(
+            &format!("component {}", k + 1),
+            format!(
+                "{poses} poses from id {first_id}: cost {}, bound {}, {}",
+                num(cost),
+                num(lower_bound),
+                if certified {
+                    "certified"
+                } else {
+                    "not certified"
+                }
             ),
         );
     }
@@ -893,7 +909,6 @@ fn text_report(input: &str, report: &Report) -> String {
         r.weights.name(),
         method_text(r),
     );
-    let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     if let Some(g) = &report.robust {
         out += &robust_text(g);
     }
@@ -928,25 +943,12 @@ fn text_report(input: &str, report: &Report) -> String {
                 .to_string(),
         );
     }
-    for (k, c) in r.components.iter().enumerate() {
-        if r.components.len() > 1 {
-            out += &row(
-                &format!("component {}", k + 1),
-                format!(
-                    "{} poses from id {}: cost {}, bound {}, {}",
-                    c.poses,
-                    c.first_id,
-                    num(c.cost),
-                    num(c.lower_bound),
-                    if c.certified {
-                        "certified"
-                    } else {
-                        "not certified"
-                    }
-                ),
-            );
-        }
-    }
+    out += &component_rows(
+        &r.components
+            .iter()
+            .map(|c| (c.poses, c.first_id, c.cost, c.lower_bound, c.certified))
+            .collect::<Vec<_>>(),
+    );
     out += &row(
         "result",
         if r.certified && r.refined_chi2.is_some() {
@@ -1040,7 +1042,6 @@ fn text_report(input: &str, report: &Report) -> String {
 
 /// The rows of `--robust`'s text report.
 fn robust_text(g: &RobustReport) -> String {
-    let row = |k: &str, v: String| format!("  {k:<21}{v}\n");
     let mut out = row(
         "robust",
         format!(
