@@ -1,7 +1,7 @@
 complete -c pgo-convert -s o -l output -d 'Output file, or - for stdout' -r
 complete -c pgo-convert -l from -d 'Input format [default: from the extension (.g2o, .graph), else from the tags]' -r -f -a "g2o\t'g2o: `VERTEX_SE2`, `EDGE_SE2`, `FIX` (docs/formats.md §2)'
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
-complete -c pgo-convert -l to -d 'Output format [default: from the output\'s extension, else the input format]; tum and kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y 0 0 0 qz qw` with t the vertex id or --stamps; KITTI: the rows of [R | t])' -r -f -a "g2o\t''
+complete -c pgo-convert -l to -d 'Output format [default: from the output\'s extension, else the input format]; tum and kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y z qx qy qz qw` with t the vertex id or --stamps, z = qx = qy = 0 for a planar graph; KITTI: the rows of [R | t])' -r -f -a "g2o\t''
 toro\t''
 tum\t''
 kitti\t''"

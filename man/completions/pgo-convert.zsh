@@ -19,7 +19,7 @@ _pgo-convert() {
 '(--stats)--output=[Output file, or - for stdout]:OUT:_default' \
 '--from=[Input format \[default\: from the extension (.g2o, .graph), else from the tags\]]:FORMAT:((g2o\:"g2o\: \`VERTEX_SE2\`, \`EDGE_SE2\`, \`FIX\` (docs/formats.md §2)"
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
-'(--stats)--to=[Output format \[default\: from the output'\''s extension, else the input format\]; tum and kitti write the poses only, sorted by id, as trajectory files for evo (TUM\: \`t x y 0 0 0 qz qw\` with t the vertex id or --stamps; KITTI\: the rows of \[R | t\])]:FORMAT:(g2o toro tum kitti)' \
+'(--stats)--to=[Output format \[default\: from the output'\''s extension, else the input format\]; tum and kitti write the poses only, sorted by id, as trajectory files for evo (TUM\: \`t x y z qx qy qz qw\` with t the vertex id or --stamps, z = qx = qy = 0 for a planar graph; KITTI\: the rows of \[R | t\])]:FORMAT:(g2o toro tum kitti)' \
 '(--stats)--stamps=[With --to tum\: time stamps of the poses, a file of \`id stamp\` lines \[default\: the vertex id\]]:FILE:_default' \
 '--dialect=[How to read the six noise values of each edge \[default\: g2o for EDGE_SE2 tags, toro-info for EDGE2/EDGE tags\]]:DIALECT:((g2o\:"Information, g2o order \`I11 I12 I13 I22 I23 I33\` (g2o; GTSAM'\''s readG2o)"
 toro-info\:"Information, TORO order \`ff fs ss rr fr sr\` (TORO, HOG-Man)"

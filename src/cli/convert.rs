@@ -4,7 +4,7 @@ use super::common::{RerunArgs, to_json_line, write_stdout};
 use super::progress_bar::Progress;
 use crate::error::Error;
 use crate::graph::NoiseKind;
-use crate::io::trajectory::{TrajectoryFormat, read_stamps, write_trajectory};
+use crate::io::trajectory::{TrajectoryFormat, read_stamps, write_trajectory, write_trajectory3};
 use crate::io::{self, Dialect, Format, ReadOptions, WriteOptions};
 use crate::stats::GraphStats;
 use clap::Parser;
@@ -59,8 +59,9 @@ pub struct Args {
     pub from: Option<Format>,
 
     /// Output format [default: from the output's extension, else the input format]; tum and
-    /// kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y 0 0 0
-    /// qz qw` with t the vertex id or --stamps; KITTI: the rows of [R | t])
+    /// kitti write the poses only, sorted by id, as trajectory files for evo (TUM: `t x y z qx qy
+    /// qz qw` with t the vertex id or --stamps, z = qx = qy = 0 for a planar graph; KITTI: the
+    /// rows of [R | t])
     #[arg(long, value_enum, value_name = "FORMAT", conflicts_with = "stats")]
     pub to: Option<Target>,
 
@@ -200,7 +201,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut graph = match graph {
         io::AnyGraph::Planar(graph) => graph,
         io::AnyGraph::Spatial(graph) => {
-            return run3(args, graph, report, read_s, progress, rec);
+            return run3(args, graph, report, read_s, stamps.as_ref(), progress, rec);
         }
     };
     progress.suspend(|| crate::cli::print_warnings(&report.warnings));
@@ -370,6 +371,7 @@ fn run3(
     mut graph: crate::graph3::Graph3,
     report: io::ReadReport,
     read_s: f64,
+    stamps: Option<&std::collections::HashMap<u32, f64>>,
     progress: Progress,
     rec: crate::viz::Recorder,
 ) -> crate::Result<ExitCode> {
@@ -396,11 +398,40 @@ fn run3(
         rec.finish()?;
         return Ok(ExitCode::SUCCESS);
     }
-    if let Some(t) = args.to.filter(|t| t.trajectory_format().is_some()) {
-        return Err(Error::Invalid(format!(
-            "--to {}: 3D trajectories are not written yet (planar graphs only)",
-            t.trajectory_format().map_or("", |f| f.name())
-        )));
+    if let Some(trajectory) = args.to.and_then(Target::trajectory_format) {
+        if args.reindex {
+            graph.reindex();
+        }
+        let t1 = Instant::now();
+        progress.phase(&format!(
+            "writing {}",
+            display_name(&args.output, "<stdout>")
+        ));
+        io::write_atomic(&args.output, |out, name| {
+            write_trajectory3(&graph, trajectory, stamps, out, name)
+        })?;
+        let write_s = t1.elapsed().as_secs_f64();
+        progress.finish();
+        if !args.quiet {
+            eprintln!(
+                "pgo-convert: {input}: {} poses, {} edges, 3D -> {}: {} trajectory of {} poses sorted by id{}",
+                graph.num_poses(),
+                graph.edges.len(),
+                display_name(&args.output, "<stdout>"),
+                trajectory.name(),
+                graph.num_poses(),
+                if graph.edges.is_empty() {
+                    ""
+                } else {
+                    " (edges left out)"
+                }
+            );
+        }
+        if args.timings {
+            eprintln!("timings: read_s={read_s:.6} write_s={write_s:.6}");
+        }
+        rec.finish()?;
+        return Ok(ExitCode::SUCCESS);
     }
     let format = args
         .to

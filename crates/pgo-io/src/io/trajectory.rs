@@ -7,6 +7,9 @@
 //!   matrix [R | t] row by row, R the rotation about z by θ and t = (x, y, 0). KITTI files have no
 //!   time stamps: line k is the k-th pose in ascending id order.
 //!
+//! 3D graphs ([`write_trajectory3`]) write their translations and rotations as they are (a TUM
+//! line's z and quaternion, KITTI's full [R | t]).
+//!
 //! Numbers are written as the graph writers write them (shortest round-trip decimals), so x, y
 //! and the quaternion's or matrix's entries read back bit for bit; θ itself is recovered only up
 //! to rounding (atan2 of the entries).
@@ -14,6 +17,7 @@
 use super::writer::format_f64;
 use crate::Error;
 use crate::graph::PoseGraph;
+use crate::graph3::Graph3;
 use std::io::Write;
 
 /// A trajectory format.
@@ -43,12 +47,59 @@ pub fn write_trajectory(
 ) -> crate::Result<()> {
     let mut order: Vec<usize> = (0..graph.num_poses()).collect();
     order.sort_by_key(|&k| graph.ids[k]);
+    let poses = order.into_iter().map(|k| {
+        let p = graph.poses[k];
+        let (s, c) = p.theta.sin_cos();
+        let (sh, ch) = (0.5 * p.theta).sin_cos();
+        (
+            graph.ids[k],
+            [p.x, p.y, 0.0],
+            [0.0, 0.0, sh, ch],
+            // −sin θ + 0: no "-0" where θ = 0.
+            [[c, -s + 0.0, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+        )
+    });
+    write_poses(poses, format, stamps, out, name)
+}
+
+/// [`write_trajectory`] for a 3D graph: the translations as read, the rotations as unit
+/// quaternions (a g2o quaternion normalized, as g2o and pgo read it; TORO's Euler angles
+/// R = Rz(yaw)·Ry(pitch)·Rx(roll) turned into one) and, for KITTI, their rotation matrices.
+pub fn write_trajectory3(
+    graph: &Graph3,
+    format: TrajectoryFormat,
+    stamps: Option<&std::collections::HashMap<u32, f64>>,
+    out: &mut dyn Write,
+    name: &str,
+) -> crate::Result<()> {
+    // A Graph3's ids are ascending already.
+    let poses = graph.ids.iter().zip(&graph.poses).map(|(&id, p)| {
+        let q = p.rotation.unit_quaternion();
+        let r = q.to_rotation_matrix();
+        let c = q.coords;
+        (
+            id,
+            p.translation,
+            [c.x, c.y, c.z, c.w],
+            // + 0: no "-0" in the matrix.
+            std::array::from_fn(|a| std::array::from_fn(|b| r[(a, b)] + 0.0)),
+        )
+    });
+    write_poses(poses, format, stamps, out, name)
+}
+
+/// The lines of a trajectory: per pose in the order given, its id, translation, unit quaternion
+/// [qx, qy, qz, qw] (TUM) and rotation matrix (KITTI).
+fn write_poses(
+    poses: impl Iterator<Item = (u32, [f64; 3], [f64; 4], [[f64; 3]; 3])> + Clone,
+    format: TrajectoryFormat,
+    stamps: Option<&std::collections::HashMap<u32, f64>>,
+    out: &mut dyn Write,
+    name: &str,
+) -> crate::Result<()> {
     // Every stamp is there before the first line is written.
     if let (Some(map), TrajectoryFormat::Tum) = (stamps, format)
-        && let Some(id) = order
-            .iter()
-            .map(|&k| graph.ids[k])
-            .find(|id| !map.contains_key(id))
+        && let Some((id, ..)) = poses.clone().find(|(id, ..)| !map.contains_key(id))
     {
         return Err(Error::Invalid(format!(
             "no time stamp for vertex {id} (every pose needs one)"
@@ -56,9 +107,7 @@ pub fn write_trajectory(
     }
     let mut line = Vec::with_capacity(256);
     let io = |e| Error::io(name, e);
-    for k in order {
-        let p = graph.poses[k];
-        let (s, c) = p.theta.sin_cos();
+    for (id, t, q, r) in poses {
         line.clear();
         let put = |v: f64, line: &mut Vec<u8>| {
             if !line.is_empty() {
@@ -68,22 +117,19 @@ pub fn write_trajectory(
         };
         match format {
             TrajectoryFormat::Tum => {
-                let id = graph.ids[k];
                 match stamps {
-                    Some(map) => {
-                        put(map[&id], &mut line);
-                    }
+                    Some(map) => put(map[&id], &mut line),
                     None => line.extend_from_slice(id.to_string().as_bytes()),
                 }
-                let (sh, ch) = (0.5 * p.theta).sin_cos();
-                for v in [p.x, p.y, 0.0, 0.0, 0.0, sh, ch] {
+                for v in t.into_iter().chain(q) {
                     put(v, &mut line);
                 }
             }
             TrajectoryFormat::Kitti => {
-                // −sin θ + 0: no "-0" where θ = 0.
-                for v in [c, -s + 0.0, 0.0, p.x, s, c, 0.0, p.y, 0.0, 0.0, 1.0, 0.0] {
-                    put(v, &mut line);
+                for a in 0..3 {
+                    for v in r[a].into_iter().chain([t[a]]) {
+                        put(v, &mut line);
+                    }
                 }
             }
         }
