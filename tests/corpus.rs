@@ -142,14 +142,20 @@ fn every_malformed_3d_input_is_an_error_at_its_place() {
             let output = dir.file(&format!("out-{name}"), b"precious\n");
             let out = run_tool(&tool, &input, Some(&output), &flags(flag_field));
             let what = format!("{} {name}", tool.name);
-            let expected = if ["pgo-convert", "pgo-solve", "pgo-certify", "pgo-spectrum"]
-                .contains(&tool.name.as_str())
+            let expected = if [
+                "pgo-convert",
+                "pgo-solve",
+                "pgo-certify",
+                "pgo-spectrum",
+                "pgo-eval",
+            ]
+            .contains(&tool.name.as_str())
             {
                 format!("{}:{at}: error: {message}\n", s(&input))
             } else {
                 let (line, tag) = first_3d_tag(&content);
                 format!(
-                    "{}:{line}:1: error: 3D pose graph (tag {tag}): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra; pgo-convert reads, writes and describes them)\n",
+                    "{}:{line}:1: error: 3D pose graph (tag {tag}): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra, pgo-eval compares them; pgo-convert reads, writes and describes them)\n",
                     s(&input)
                 )
             };

@@ -622,7 +622,11 @@ fn json_reports_are_documented() {
         ),
         (
             "pgo-eval",
-            &[(mit, "SOLVED"), (mit, "SOLVED --no-align --delta 900")],
+            &[
+                (mit, "SOLVED"),
+                (mit, "SOLVED --no-align --delta 900"),
+                (three_d, "THREE_D"),
+            ],
         ),
     ];
     let out = Command::new(bin_dir().join("pgo-solve"))
@@ -634,7 +638,9 @@ fn json_reports_are_documented() {
     for (tool, cases) in runs {
         let mut printed = std::collections::BTreeSet::new();
         for (input, flags) in cases {
-            let flags = flags.replace("SOLVED", solved_path);
+            let flags = flags
+                .replace("SOLVED", solved_path)
+                .replace("THREE_D", three_d);
             let out = Command::new(bin_dir().join(tool))
                 .current_dir(root())
                 .arg(input)

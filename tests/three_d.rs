@@ -290,7 +290,7 @@ fn the_planar_only_tools_refuse_3d_files_with_a_specific_message() {
         assert_eq!(
             text(&out.stderr),
             format!(
-                "{}:1:1: error: 3D pose graph (tag VERTEX_SE3:QUAT): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra; pgo-convert reads, writes and describes them)\n",
+                "{}:1:1: error: 3D pose graph (tag VERTEX_SE3:QUAT): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra, pgo-eval compares them; pgo-convert reads, writes and describes them)\n",
                 s(&input)
             ),
             "{}",
@@ -301,7 +301,13 @@ fn the_planar_only_tools_refuse_3d_files_with_a_specific_message() {
 }
 
 /// The tools that read 3D files (issue 15).
-const READS_3D: [&str; 4] = ["pgo-convert", "pgo-solve", "pgo-certify", "pgo-spectrum"];
+const READS_3D: [&str; 5] = [
+    "pgo-convert",
+    "pgo-solve",
+    "pgo-certify",
+    "pgo-spectrum",
+    "pgo-eval",
+];
 
 #[test]
 fn pgo_convert_round_trips_toro_3d_and_reads_3d_on_stdin() {

@@ -5,9 +5,9 @@ use crate::error::Error;
 use crate::eval::align::Alignment;
 use crate::eval::ape::{AbsoluteError, absolute_error};
 use crate::eval::rpe::{RelativeError, relative_error};
+use crate::eval::spatial::{Alignment3, absolute_error3, match_by_id3, relative_error3};
 use crate::eval::{Statistics, match_by_id};
-use crate::graph::PoseGraph;
-use crate::io;
+use crate::io::{self, AnyGraph};
 use clap::Parser;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -21,10 +21,10 @@ Examples:
 /// Error of an estimate against a reference: ground truth, or another solver's estimate.
 ///
 /// Poses are matched by vertex id (ids in only one file are left out and counted). The estimate
-/// is aligned to the reference by the SE(2) transform that minimizes the squared position error
-/// (Umeyama's alignment without scale, as evo's --align), then:
+/// is aligned to the reference by the SE(2) transform (SE(3) for 3D graphs) that minimizes the
+/// squared position error (Umeyama's alignment without scale, as evo's --align), then:
 /// APE, the absolute pose error per matched pose: the distance between the positions (m) and the
-/// heading difference (degrees);
+/// heading difference (degrees; in 3D the angle of the rotation error Q^-1 P);
 /// RPE, the relative pose error over pairs of matched poses --delta apart in ascending id order:
 /// the error of the estimate's relative motion against the reference's, (Q_i^-1 Q_j)^-1 (P_i^-1
 /// P_j), its translation norm and rotation angle (alignment does not change it). Pairs (0, d),
@@ -68,13 +68,22 @@ pub struct Report {
     pub reference_poses: usize,
     /// Poses with an id in both files.
     pub matched: usize,
-    /// The SE(2) transform applied to the estimate (absent with --no-align).
+    /// The transform applied to the estimate (absent with --no-align): SE(2) `angle`, `x`, `y`,
+    /// or for 3D graphs SE(3) `rotation` (rows) and `translation`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub alignment: Option<Alignment>,
+    pub alignment: Option<AnyAlignment>,
     pub ape: AbsoluteError,
     /// Absent when fewer than D + 1 poses are matched.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rpe: Option<RelativeError>,
+}
+
+/// The alignment of a planar or a 3D estimate.
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(untagged)]
+pub enum AnyAlignment {
+    Planar(Alignment),
+    Spatial(Alignment3),
 }
 
 /// Entry point of the `pgo-eval` binary.
@@ -85,12 +94,14 @@ pub fn main() -> ExitCode {
 
 /// Reads a file of poses; a file without vertex lines has none to compare. Its warnings are
 /// printed unless `quiet` (the same file read a second time).
-fn read_poses(args: &Args, path: &str, quiet: bool) -> crate::Result<PoseGraph> {
-    let (graph, report) = io::read_path(path, &args.read.options())?;
+fn read_poses(args: &Args, path: &str, quiet: bool) -> crate::Result<AnyGraph> {
+    let (graph, report) = io::read_any_path(path, &args.read.options())?;
     if !quiet {
         crate::cli::print_warnings(&report.warnings);
     }
-    if !graph.vertices_declared {
+    if let AnyGraph::Planar(g) = &graph
+        && !g.vertices_declared
+    {
         return Err(Error::Invalid(format!(
             "{path}: the file has no vertex lines, so it holds no poses to compare"
         )));
@@ -101,28 +112,57 @@ fn read_poses(args: &Args, path: &str, quiet: bool) -> crate::Result<PoseGraph> 
 pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let estimate = read_poses(args, &args.estimate, false)?;
     let reference = read_poses(args, &args.reference, args.reference == args.estimate)?;
-    let matched = match_by_id(&estimate, &reference);
-    if matched.ids.is_empty() {
-        return Err(Error::Invalid(format!(
+    let (delta, all_pairs) = (args.delta as usize, args.all_pairs);
+    let no_common = || {
+        Error::Invalid(format!(
             "{} and {} have no vertex id in common",
             args.estimate, args.reference
-        )));
-    }
-    let alignment = if args.no_align {
-        None
-    } else {
-        // Some: at least one pose is matched.
-        Alignment::least_squares(&matched)
+        ))
     };
-    let ape = absolute_error(&matched, &alignment.unwrap_or(Alignment::IDENTITY))
-        .expect("at least one matched pose");
-    let report = Report {
-        estimate_poses: estimate.num_poses(),
-        reference_poses: reference.num_poses(),
-        matched: matched.ids.len(),
-        alignment,
-        ape,
-        rpe: relative_error(&matched, args.delta as usize, args.all_pairs),
+    let report = match (&estimate, &reference) {
+        (AnyGraph::Planar(e), AnyGraph::Planar(r)) => {
+            let matched = match_by_id(e, r);
+            let alignment = (!args.no_align)
+                .then(|| Alignment::least_squares(&matched))
+                .flatten();
+            Report {
+                estimate_poses: e.num_poses(),
+                reference_poses: r.num_poses(),
+                matched: matched.ids.len(),
+                ape: absolute_error(&matched, &alignment.unwrap_or(Alignment::IDENTITY))
+                    .ok_or_else(no_common)?,
+                alignment: alignment.map(AnyAlignment::Planar),
+                rpe: relative_error(&matched, delta, all_pairs),
+            }
+        }
+        (AnyGraph::Spatial(e), AnyGraph::Spatial(r)) => {
+            let matched = match_by_id3(e, r);
+            let alignment = (!args.no_align)
+                .then(|| Alignment3::least_squares(&matched))
+                .flatten();
+            Report {
+                estimate_poses: e.num_poses(),
+                reference_poses: r.num_poses(),
+                matched: matched.ids.len(),
+                ape: absolute_error3(&matched, &alignment.unwrap_or(Alignment3::IDENTITY))
+                    .ok_or_else(no_common)?,
+                alignment: alignment.map(AnyAlignment::Spatial),
+                rpe: relative_error3(&matched, delta, all_pairs),
+            }
+        }
+        (e, _) => {
+            let dim = |g: &AnyGraph| match g {
+                AnyGraph::Planar(_) => "planar",
+                AnyGraph::Spatial(_) => "3D",
+            };
+            return Err(Error::Invalid(format!(
+                "{} is {} and {} is {}: both must be planar or both 3D",
+                args.estimate,
+                dim(e),
+                args.reference,
+                dim(&reference)
+            )));
+        }
     };
     if args.json {
         write_stdout(to_json_line(&report)?.as_bytes())?;
@@ -150,11 +190,18 @@ fn text_report(args: &Args, r: &Report) -> String {
         args.estimate, args.reference, r.matched, r.estimate_poses, r.reference_poses
     );
     match &r.alignment {
-        Some(a) => out.push_str(&format!(
+        Some(AnyAlignment::Planar(a)) => out.push_str(&format!(
             "  aligned by SE(2): rotation {} rad, translation ({}, {})\n",
             num(a.angle),
             num(a.x),
             num(a.y)
+        )),
+        Some(AnyAlignment::Spatial(a)) => out.push_str(&format!(
+            "  aligned by SE(3): rotation of {} rad, translation ({}, {}, {})\n",
+            num(a.isometry().rotation.angle()),
+            num(a.translation[0]),
+            num(a.translation[1]),
+            num(a.translation[2])
         )),
         None => out.push_str("  not aligned (--no-align)\n"),
     }

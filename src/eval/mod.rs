@@ -2,39 +2,54 @@
 //! estimate), as evo (Grupp, 2017) computes it for planar poses: poses matched by vertex id,
 //! the estimate aligned to the reference by the SE(2) transform that minimizes the squared
 //! position error ([`align`]), then the absolute pose error per pose ([`ape`]) and the relative
-//! pose error over a fixed id step ([`rpe`]), each summarized by [`Statistics`].
+//! pose error over a fixed id step ([`rpe`]), each summarized by [`Statistics`]; the same for 3D
+//! graphs with an SE(3) alignment ([`spatial`]).
 //!
 //! May use: pgo-io (the graph model). Nothing of the solver: any two files of poses compare.
 
 pub mod align;
 pub mod ape;
 pub mod rpe;
+pub mod spatial;
 
 use crate::graph::{Pose2, PoseGraph};
 use serde::Serialize;
 
 /// The poses of the estimate and of the reference with the same vertex id, in ascending id
-/// order.
+/// order (planar poses, or rigid motions of 3D graphs: [`spatial`]).
 #[derive(Debug, Clone)]
-pub struct Matched {
+pub struct Matched<P = Pose2> {
     pub ids: Vec<u32>,
-    pub estimate: Vec<Pose2>,
-    pub reference: Vec<Pose2>,
+    pub estimate: Vec<P>,
+    pub reference: Vec<P>,
 }
 
 /// Pairs the poses of `estimate` and `reference` by vertex id (ids in only one are left out).
 pub fn match_by_id(estimate: &PoseGraph, reference: &PoseGraph) -> Matched {
-    let mut by_id: Vec<(u32, Pose2)> = reference
-        .ids
+    match_ids(
+        &estimate.ids,
+        &estimate.poses,
+        &reference.ids,
+        &reference.poses,
+    )
+}
+
+/// [`match_by_id`] of any poses, given with their ids.
+pub fn match_ids<P: Copy>(
+    estimate_ids: &[u32],
+    estimate: &[P],
+    reference_ids: &[u32],
+    reference: &[P],
+) -> Matched<P> {
+    let mut by_id: Vec<(u32, P)> = reference_ids
         .iter()
-        .zip(&reference.poses)
+        .zip(reference)
         .map(|(&id, &p)| (id, p))
         .collect();
     by_id.sort_by_key(|&(id, _)| id);
-    let mut pairs: Vec<(u32, Pose2, Pose2)> = estimate
-        .ids
+    let mut pairs: Vec<(u32, P, P)> = estimate_ids
         .iter()
-        .zip(&estimate.poses)
+        .zip(estimate)
         .filter_map(|(&id, &p)| {
             by_id
                 .binary_search_by_key(&id, |&(i, _)| i)

@@ -3,8 +3,11 @@
 The poses evo reads are held against the g2o file's vertex lines parsed here: translations bit
 for bit, rotations those of the normalized quaternions (as g2o and pgo read them), built here
 by the textbook formula. evo's APE between a pgo-solve estimate and the input's vertices is the
-same whether the two trajectories went through TUM or KITTI files.
+same whether the two trajectories went through TUM or KITTI files, and pgo-eval's APE and RPE
+on the g2o files equal evo's on TUM files written here from the vertex lines.
 """
+
+import json
 
 import subprocess
 
@@ -109,3 +112,47 @@ def test_toro_3d_trajectories_carry_euler_rotations(tmp_path):
     rz = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]])
     assert np.abs(traj.poses_se3[1][:3, :3] - rz @ ry @ rx).max() < 1e-15
     assert np.array_equal(traj.positions_xyz[1], [1.0, 2.0, 3.0])
+
+
+def write_tum(poses, path):
+    with open(path, "w") as f:
+        for i in sorted(poses):
+            t, q = poses[i]
+            f.write(" ".join(repr(float(v)) for v in [i, *t, *q]) + "\n")
+
+
+def close(a, b, rel=1e-9, abs_=1e-12):
+    return abs(a - b) <= rel * max(abs(a), abs(b)) + abs_
+
+
+@pytest.mark.parametrize("delta, all_pairs", [(1, False), (10, False), (10, True)])
+def test_pgo_eval_on_3d_graphs_equals_evo(grid, delta, all_pairs):
+    d, est, reference = grid
+    flags = ["--delta", str(delta)] + (["--all-pairs"] if all_pairs else [])
+    out = subprocess.run(
+        [pgo_binary("pgo-eval"), est, reference, "--json", *flags],
+        check=True,
+        capture_output=True,
+    )
+    ours = json.loads(out.stdout)
+    assert ours["matched"] == 125 and len(ours["alignment"]["rotation"]) == 3
+    write_tum(g2o_poses3(est), d / "eval-est.tum")
+    write_tum(g2o_poses3(reference), d / "eval-ref.tum")
+    for kind in ["ape", "rpe"]:
+        for relation, key in [
+            (evo_metrics.PoseRelation.translation_part, "translation"),
+            (evo_metrics.PoseRelation.rotation_angle_deg, "rotation_deg"),
+        ]:
+            ref = file_interface.read_tum_trajectory_file(str(d / "eval-ref.tum"))
+            traj = file_interface.read_tum_trajectory_file(str(d / "eval-est.tum"))
+            if kind == "ape":
+                traj.align(ref, correct_scale=False)
+                metric = evo_metrics.APE(relation)
+            else:
+                metric = evo_metrics.RPE(
+                    relation, delta, evo_metrics.Unit.frames, all_pairs=all_pairs
+                )
+            metric.process_data((ref, traj))
+            theirs = metric.get_all_statistics()
+            for stat in ["rmse", "mean", "median", "std", "min", "max"]:
+                assert close(ours[kind][key][stat], theirs[stat]), (kind, key, stat)

@@ -54,7 +54,7 @@ pub enum ParseErrorKind {
         hint: &'static str,
     },
     #[error(
-        "3D pose graph (tag {tag}): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra; pgo-convert reads, writes and describes them)"
+        "3D pose graph (tag {tag}): this tool handles planar SE(2) graphs only (pgo-solve and pgo-certify solve and certify 3D files, pgo-spectrum prints their spectra, pgo-eval compares them; pgo-convert reads, writes and describes them)"
     )]
     ThreeD { tag: String },
     #[error(
