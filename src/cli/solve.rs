@@ -756,32 +756,54 @@ fn text_report3(input: &str, report: &Report3) -> String {
     if let Some(why) = &r.not_certified_because {
         out += &row("why not certified", why.clone());
     }
-    if let Some(chi2) = r.refined_chi2 {
-        let before: f64 = r.components.iter().filter_map(|c| c.certified_chi2).sum();
+    out += &closing_rows(
+        r.refined_chi2.map(|chi2| {
+            let before = r.components.iter().filter_map(|c| c.certified_chi2).sum();
+            (before, chi2)
+        }),
+        "full 6x6 information matrices",
+        report.written_estimate == "refined",
+        report.written_chi2.map_or("undefined".into(), num),
+        report.timings.as_ref(),
+    );
+    out
+}
+
+/// The last rows of the planar and 3D text reports: the refinement's chi2 (before, after) under
+/// `information`, which estimate was written (with its chi2 as text), the timings.
+fn closing_rows(
+    refined: Option<(f64, f64)>,
+    information: &str,
+    written_refined: bool,
+    written_chi2: String,
+    timings: Option<&Timings>,
+) -> String {
+    let mut out = String::new();
+    if let Some((before, after)) = refined {
         out += &row(
             "refined (LM, chi2)",
-            format!(
-                "{} -> {} (full 6x6 information matrices)",
-                num(before),
-                num(chi2)
-            ),
+            format!("{} -> {} ({information})", num(before), num(after)),
         );
     }
-    if report.written_estimate == "refined" {
+    if written_refined {
         out += &row(
             "written estimate",
             format!(
-                "refined by LM (chi2 {}), not the certified one; certify it with pgo-certify",
-                report.written_chi2.map_or("undefined".into(), num)
+                "refined by LM (chi2 {written_chi2}), not the certified one; certify it with pgo-certify"
             ),
         );
     }
-    if let Some(t) = &report.timings {
+    if let Some(t) = timings {
         out += &row(
             "time",
             format!(
-                "read {:.3} s, solve {:.3} s, write {:.3} s",
-                t.read_s, t.solve_s, t.write_s
+                "read {:.3} s, solve {:.3} s, write {:.3} s{}",
+                t.read_s,
+                t.solve_s,
+                t.write_s,
+                t.marginals_s
+                    .map(|m| format!(", marginals {m:.3} s"))
+                    .unwrap_or_default()
             ),
         );
     }
@@ -1003,40 +1025,16 @@ fn text_report(input: &str, report: &Report) -> String {
             },
         );
     }
-    if let Some(chi2) = r.refined_chi2 {
-        let before: f64 = r.components.iter().filter_map(|c| c.certified_chi2).sum();
-        out += &row(
-            "refined (LM, chi2)",
-            format!(
-                "{} -> {} (full information matrices)",
-                num(before),
-                num(chi2)
-            ),
-        );
-    }
-    if report.written_estimate == "refined" {
-        out += &row(
-            "written estimate",
-            format!(
-                "refined by LM (chi2 {}), not the certified one; certify it with pgo-certify",
-                chi2_text(report.written_chi2)
-            ),
-        );
-    }
-    if let Some(t) = &report.timings {
-        out += &row(
-            "time",
-            format!(
-                "read {:.3} s, solve {:.3} s, write {:.3} s{}",
-                t.read_s,
-                t.solve_s,
-                t.write_s,
-                t.marginals_s
-                    .map(|m| format!(", marginals {m:.3} s"))
-                    .unwrap_or_default()
-            ),
-        );
-    }
+    out += &closing_rows(
+        r.refined_chi2.map(|chi2| {
+            let before = r.components.iter().filter_map(|c| c.certified_chi2).sum();
+            (before, chi2)
+        }),
+        "full information matrices",
+        report.written_estimate == "refined",
+        chi2_text(report.written_chi2),
+        report.timings.as_ref(),
+    );
     out
 }
 
