@@ -170,36 +170,53 @@ impl SimulationConfig {
     /// Checks every value: n at most 2³¹ (ids must fit g2o's `int`), side finite and positive,
     /// P_c in [0, 1], σ and h finite and non-negative.
     pub fn validate(&self) -> crate::Result<()> {
-        let invalid = |m: String| Err(Error::Invalid(m));
-        if self.n > MAX_VERTEX_ID as usize + 1 {
-            return invalid(format!(
-                "n = {} poses: ids must fit g2o's int, at most {}",
-                self.n,
-                MAX_VERTEX_ID as u64 + 1
-            ));
-        }
-        if !(self.side.is_finite() && self.side > 0.0) {
-            return invalid(format!("side = {}: must be a finite number > 0", self.side));
-        }
-        if !(0.0..=1.0).contains(&self.loop_probability) {
-            return invalid(format!(
-                "loop probability = {}: must be in [0, 1]",
-                self.loop_probability
-            ));
-        }
-        if let RotationNoise::Gaussian { sigma } = self.rotation_noise {
-            check_scale("rotation noise sigma", sigma).map_err(Error::Invalid)?;
-        }
-        match self.translation_noise {
-            TranslationNoise::Gaussian { sigma } => {
-                check_scale("translation noise sigma", sigma).map_err(Error::Invalid)?
-            }
-            TranslationNoise::Uniform { half_width } => {
-                check_scale("translation noise half-width", half_width).map_err(Error::Invalid)?
-            }
-        }
-        Ok(())
+        validate_model(
+            self.n,
+            self.side,
+            self.loop_probability,
+            self.rotation_noise,
+            self.translation_noise,
+        )
     }
+}
+
+/// The checks of [`SimulationConfig::validate`], shared with the 3D worlds
+/// (`space::SpaceConfig::validate`): n at most 2³¹, side finite and positive, P_c in [0, 1],
+/// σ and h finite and non-negative.
+pub(crate) fn validate_model(
+    n: usize,
+    side: f64,
+    loop_probability: f64,
+    rotation_noise: RotationNoise,
+    translation_noise: TranslationNoise,
+) -> crate::Result<()> {
+    let invalid = |m: String| Err(Error::Invalid(m));
+    if n > MAX_VERTEX_ID as usize + 1 {
+        return invalid(format!(
+            "n = {n} poses: ids must fit g2o's int, at most {}",
+            MAX_VERTEX_ID as u64 + 1
+        ));
+    }
+    if !(side.is_finite() && side > 0.0) {
+        return invalid(format!("side = {side}: must be a finite number > 0"));
+    }
+    if !(0.0..=1.0).contains(&loop_probability) {
+        return invalid(format!(
+            "loop probability = {loop_probability}: must be in [0, 1]"
+        ));
+    }
+    if let RotationNoise::Gaussian { sigma } = rotation_noise {
+        check_scale("rotation noise sigma", sigma).map_err(Error::Invalid)?;
+    }
+    match translation_noise {
+        TranslationNoise::Gaussian { sigma } => {
+            check_scale("translation noise sigma", sigma).map_err(Error::Invalid)?
+        }
+        TranslationNoise::Uniform { half_width } => {
+            check_scale("translation noise half-width", half_width).map_err(Error::Invalid)?
+        }
+    }
+    Ok(())
 }
 
 /// A simulated problem: the graph (poses = ground truth) and the ground truth itself.

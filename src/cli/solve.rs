@@ -333,16 +333,13 @@ impl<'a> Report<'a> {
         warnings: Vec<String>,
         timings: Option<Timings>,
     ) -> Self {
-        let refined = solution.refined_chi2.is_some();
+        let (written_estimate, written_chi2, written_certified) =
+            written(solution.refined_chi2, solution.chi2, solution.certified);
         Report {
             solution,
-            written_estimate: if refined { "refined" } else { "solved" },
-            written_chi2: if refined {
-                solution.refined_chi2
-            } else {
-                solution.chi2
-            },
-            written_certified: !refined && solution.certified,
+            written_estimate,
+            written_chi2,
+            written_certified,
             robust,
             suspect_loop_closures: None,
             warnings,
@@ -596,16 +593,13 @@ impl<'a> Report3<'a> {
         warnings: Vec<String>,
         timings: Option<Timings>,
     ) -> Self {
-        let refined = solution.refined_chi2.is_some();
+        let (written_estimate, written_chi2, written_certified) =
+            written(solution.refined_chi2, solution.chi2, solution.certified);
         Report3 {
             solution,
-            written_estimate: if refined { "refined" } else { "solved" },
-            written_chi2: if refined {
-                solution.refined_chi2
-            } else {
-                solution.chi2
-            },
-            written_certified: !refined && solution.certified,
+            written_estimate,
+            written_chi2,
+            written_certified,
             warnings,
             timings,
         }
@@ -808,6 +802,19 @@ fn closing_rows(
         );
     }
     out
+}
+
+/// Which estimate `-o` holds, its chi2 and whether it is certified: the refined one (never
+/// certified) when there is a refinement, else the solved one.
+fn written(
+    refined_chi2: Option<f64>,
+    chi2: Option<f64>,
+    certified: bool,
+) -> (&'static str, Option<f64>, bool) {
+    match refined_chi2 {
+        Some(refined) => ("refined", Some(refined), false),
+        None => ("solved", chi2, certified),
+    }
 }
 
 /// A row of the text report: the label in a column of 21, the value.

@@ -66,9 +66,7 @@
 //! (the draws and the worlds' angles), `exp` and `exp_m1` (the information); the sizes K and m
 //! are found by integer arithmetic, and nalgebra's quaternion products are plain arithmetic.
 
-use super::{RotationNoise, TranslationNoise, check_scale};
-use crate::error::Error;
-use crate::graph::MAX_VERTEX_ID;
+use super::{RotationNoise, TranslationNoise};
 use crate::graph3::{Edge3, Form3, Graph3, Pose3, Rotation3, SymMat6};
 use crate::linalg::rng::{Rng, SplitMix64};
 use nalgebra::{Matrix3, Quaternion, Rotation3 as Rot3, UnitQuaternion, Vector3};
@@ -110,35 +108,13 @@ pub struct SpaceConfig {
 impl SpaceConfig {
     /// Checks every value as [`super::SimulationConfig::validate`] does.
     pub fn validate(&self) -> crate::Result<()> {
-        let invalid = |m: String| Err(Error::Invalid(m));
-        if self.n > MAX_VERTEX_ID as usize + 1 {
-            return invalid(format!(
-                "n = {} poses: ids must fit g2o's int, at most {}",
-                self.n,
-                MAX_VERTEX_ID as u64 + 1
-            ));
-        }
-        if !(self.side.is_finite() && self.side > 0.0) {
-            return invalid(format!("side = {}: must be a finite number > 0", self.side));
-        }
-        if !(0.0..=1.0).contains(&self.loop_probability) {
-            return invalid(format!(
-                "loop probability = {}: must be in [0, 1]",
-                self.loop_probability
-            ));
-        }
-        if let RotationNoise::Gaussian { sigma } = self.rotation_noise {
-            check_scale("rotation noise sigma", sigma).map_err(Error::Invalid)?;
-        }
-        match self.translation_noise {
-            TranslationNoise::Gaussian { sigma } => {
-                check_scale("translation noise sigma", sigma).map_err(Error::Invalid)?
-            }
-            TranslationNoise::Uniform { half_width } => {
-                check_scale("translation noise half-width", half_width).map_err(Error::Invalid)?
-            }
-        }
-        Ok(())
+        super::validate_model(
+            self.n,
+            self.side,
+            self.loop_probability,
+            self.rotation_noise,
+            self.translation_noise,
+        )
     }
 }
 
