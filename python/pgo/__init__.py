@@ -351,7 +351,7 @@ def solve(
     *,
     solver: Optional[str] = None,
     max_rank: int = 6,
-    staircase_budget: float = 200.0,
+    staircase_budget: float = 50.0,
     refine: bool = False,
 ) -> Solution:
     """Solves ``graph`` to a certified global optimum, as ``pgo-solve`` does.

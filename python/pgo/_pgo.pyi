@@ -171,7 +171,7 @@ def solve(
     method: str = "auto",
     solver: Optional[str] = None,
     max_rank: int = 6,
-    staircase_budget: float = 200.0,
+    staircase_budget: float = 50.0,
     refine: bool = False,
 ) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 def certify(

@@ -1083,7 +1083,7 @@ fn any_graph<'a>(graph: &'a Bound<'_, PyAny>) -> PyResult<AnyRef<'a>> {
 /// ((L, 2); (0, 3) for a 3D graph). 3D graphs are solved by [`pgo::solve::solve3`], which refuses
 /// what does not apply to them (method "sdp", refine on a TORO file); `solver` is then not used.
 #[pyfunction]
-#[pyo3(signature = (graph, weights="isotropic", tol=1e-6, method="auto", solver=None, max_rank=6, staircase_budget=200.0, refine=false))]
+#[pyo3(signature = (graph, weights="isotropic", tol=1e-6, method="auto", solver=None, max_rank=6, staircase_budget=50.0, refine=false))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn solve<'py>(
     py: Python<'py>,
@@ -1115,6 +1115,7 @@ fn solve<'py>(
         refine,
         max_rank,
         staircase_budget: staircase_budget * 1e9,
+        ..Default::default()
     };
     let g = match any_graph(graph)? {
         AnyRef::Planar(g) => g,

@@ -108,11 +108,11 @@ pub struct Args {
     /// The staircase's work at most, in 10⁹ multiply-adds of its sparse factorizations (Newton
     /// steps, certificate attempts), counted from the factors' structure and not timed, so the
     /// answer is the same on every machine; about 20 per second on one core. The first descent
-    /// at rank 1 may always take 50 Newton steps. Past it the solver reports the best estimate
+    /// at rank 1 may always take 12 Newton steps. Past it the solver reports the best estimate
     /// and bound it reached and why it stopped. Graphs of a few hundred poses never reach the
     /// default; long false loop closures (outliers) fill the factors and reach it in seconds
     /// (try --robust)
-    #[arg(long, default_value = "200", value_name = "GMA", value_parser = super::common::parse_budget, allow_negative_numbers = true)]
+    #[arg(long, default_value = "50", value_name = "GMA", value_parser = super::common::parse_budget, allow_negative_numbers = true)]
     pub staircase_budget: f64,
 
     /// Refine the certified estimate by Levenberg-Marquardt under the file's full information
@@ -427,6 +427,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         refine: args.refine,
         max_rank: args.max_rank as usize,
         staircase_budget: args.staircase_budget * 1e9,
+        ..Default::default()
     };
     let t1 = Instant::now();
     // What `--robust` found, for the viewer once the estimate is known.
@@ -627,6 +628,7 @@ fn run3(
         refine: args.refine,
         max_rank: args.max_rank as usize,
         staircase_budget: args.staircase_budget * 1e9,
+        ..Default::default()
     };
     let t1 = Instant::now();
     let solution = progress.watch(|| rec.observe(|| crate::solve::solve3(&graph, &options)))?;

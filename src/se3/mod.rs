@@ -56,7 +56,8 @@ impl Default for Options3 {
             tolerance: 1e-6,
             max_iterations: 200,
             max_rank: 10,
-            budget: 2e11,
+            // The planar staircase's default (its STAIRCASE_BUDGET), which `--staircase-budget` sets.
+            budget: 5e10,
         }
     }
 }

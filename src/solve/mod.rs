@@ -75,6 +75,9 @@ pub struct SolveOptions {
     /// The staircase's work at most, in real multiply-adds of its factorizations
     /// ([`StaircaseOptions::staircase_budget`], default [`crate::staircase::STAIRCASE_BUDGET`]).
     pub staircase_budget: f64,
+    /// The Newton steps the staircase's first descent may always take, past the budget
+    /// ([`StaircaseOptions::min_descent_steps`], default [`crate::staircase::MIN_DESCENT_STEPS`]).
+    pub min_descent_steps: usize,
 }
 
 impl Default for SolveOptions {
@@ -87,6 +90,7 @@ impl Default for SolveOptions {
             refine: false,
             max_rank: StaircaseOptions::default().max_rank,
             staircase_budget: StaircaseOptions::default().staircase_budget,
+            min_descent_steps: StaircaseOptions::default().min_descent_steps,
         }
     }
 }
@@ -280,6 +284,7 @@ fn solve_with(
         tolerance: options.tolerance,
         max_rank: options.max_rank,
         staircase_budget: options.staircase_budget,
+        min_descent_steps: options.min_descent_steps,
         ..Default::default()
     };
     for (part, members, _) in graph.components() {

@@ -68,9 +68,12 @@ pub struct StaircaseOptions {
     /// the staircase ran for minutes. Past the budget the staircase stops and reports the best
     /// estimate and the bound it reached, with [`StaircaseSolution::limit_reached`]; graphs of a
     /// few hundred poses never reach the default. The first descent at rank 1 may take
-    /// [`MIN_DESCENT_STEPS`] Newton steps whatever their work, so that a clean graph too large
-    /// for the budget (10⁶ poses) still reaches its minimum.
+    /// [`StaircaseOptions::min_descent_steps`] Newton steps whatever their work.
     pub staircase_budget: f64,
+    /// The Newton steps the first descent at rank 1 may always take, past the budget (default
+    /// [`MIN_DESCENT_STEPS`]), so that a clean graph too large for the budget (10⁶ poses) still
+    /// reaches its minimum.
+    pub min_descent_steps: usize,
 }
 
 impl Default for StaircaseOptions {
@@ -80,20 +83,24 @@ impl Default for StaircaseOptions {
             max_iterations: 200,
             max_rank: 6,
             staircase_budget: STAIRCASE_BUDGET,
+            min_descent_steps: MIN_DESCENT_STEPS,
         }
     }
 }
 
-/// [`StaircaseOptions::staircase_budget`]'s default: 2·10¹¹ multiply-adds, about 10 s on one
-/// core of a 2026 x86 machine.
-pub const STAIRCASE_BUDGET: f64 = 2e11;
+/// [`StaircaseOptions::staircase_budget`]'s default: 5·10¹⁰ multiply-adds, about 2.5 s on one
+/// core of a 2026 x86 machine. One Newton step at rank 1 on city10000 (10⁴ poses) factors
+/// 1·10⁸; the public planar files all certify at rank 1 in at most 12 steps, far below it. With
+/// 1000 random false loop closures one step on city10000 factors 8.9·10⁹ (the long closures fill
+/// the factor): the budget then ends the staircase in seconds, not minutes (issue 18).
+pub const STAIRCASE_BUDGET: f64 = 5e10;
 
 /// The Newton steps the first descent at rank 1 may always take, past the budget: the public
-/// files take at most 10 (ais2klinik), generated graphs of 10⁶ poses fewer. Beyond them and
-/// the budget the descent stops: on city10000 with 1000 false loop closures (Vertigo's random
-/// model) it ran the 200 steps of [`StaircaseOptions::max_iterations`], 0.2 s each on a factor
-/// filled by the long closures, still far from a minimum (issue 18).
-pub const MIN_DESCENT_STEPS: usize = 50;
+/// files take at most 12 (M3500c), generated graphs of 10⁶ poses 7 (scripts/bench-scale), so a
+/// clean graph too large for the budget still converges. Beyond them and the budget the descent
+/// stops: on city10000 with 1000 false loop closures (Vertigo's random model) it ran the 200
+/// steps of [`StaircaseOptions::max_iterations`], 0.3 s each, still far from a minimum.
+pub const MIN_DESCENT_STEPS: usize = 12;
 
 /// The work of one Newton step at rank p in Newton steps at rank 1: the Newton system keeps the
 /// pattern of W̃ at every rank, with blocks of 4p − 1 tangent coordinates per pose (2p for the
@@ -449,7 +456,7 @@ pub fn optimize_to(
 
 /// As [`optimize_to`], within `work_limit` multiply-adds of its factorizations when given: at
 /// most work_limit / (one factorization's multiply-adds) steps, and never fewer than
-/// [`MIN_DESCENT_STEPS`] (nor more than `options.max_iterations`).
+/// [`StaircaseOptions::min_descent_steps`] (nor more than `options.max_iterations`).
 pub fn optimize_within(
     problem: &Problem,
     mut positions: Option<&mut OptimalPositions>,
@@ -474,9 +481,11 @@ pub fn optimize_within(
     let mut system = NewtonSystem::new(problem, &at.basis);
     let step_work = system.factor.multiply_adds();
     let max_iterations = match work_limit {
-        Some(w) => options
-            .max_iterations
-            .min(MIN_DESCENT_STEPS.max((w / step_work).max(0.0) as usize)),
+        Some(w) => options.max_iterations.min(
+            options
+                .min_descent_steps
+                .max((w / step_work).max(0.0) as usize),
+        ),
         None => options.max_iterations,
     };
     let mut mu = 1e-6;
@@ -679,7 +688,7 @@ pub fn solve_from(
     // accurate, one of its two zero eigenvalues of W(λ*) lost.
     let mut positions = OptimalPositions::new(problem);
     crate::progress::phase("Newton");
-    // The first descent gets the budget but its reserve (below), and MIN_DESCENT_STEPS at least.
+    // The first descent gets the budget but its reserve (below), and min_descent_steps at least.
     let mut local = optimize_within(
         problem,
         positions.as_mut(),
