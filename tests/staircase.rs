@@ -460,3 +460,57 @@ fn pgo_solve_reports_the_staircase_limits() {
         assert_eq!(out.status.code(), Some(2), "{bad:?}: {out:?}");
     }
 }
+
+#[test]
+fn a_second_certificate_at_the_same_multipliers_repeats_no_factorization() {
+    // The inertia of W̃(λ) depends on λ alone: asked again at the same λ, the certifier answers
+    // as a fresh one does (proof or none), without another ladder of factorizations. Clean
+    // M3500 (a proof) and intel with 100 false loop closures (none: several eigenvalues at zero).
+    use pgo::certify::SparseCertifier;
+    use pgo::robust::outliers::{OutlierConfig, OutlierModel, add_outliers};
+    use pgo::staircase::solve_anchored;
+    let read = |name: &str| {
+        let path = common::datasets_dir().join(name);
+        pgo::io::read_path(path.to_str().unwrap(), &Default::default())
+            .unwrap()
+            .0
+    };
+    let mut corrupted = read("intel.g2o");
+    add_outliers(
+        &mut corrupted,
+        &OutlierConfig {
+            count: 100,
+            model: OutlierModel::Random,
+            group: 1,
+            noise: None,
+            seed: 1,
+        },
+    )
+    .unwrap();
+    for (g, proven) in [(read("M3500.g2o"), true), (corrupted, false)] {
+        let w = edge_weights(&g, Weights::Isotropic).unwrap();
+        let (s, anchored) =
+            solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+        let problem = &anchored.problem;
+        let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+        // The returned rank-1 estimate and its own λ, with the widest η search (the bound's).
+        let eta_max = s.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
+        let mut once = fresh();
+        let first = once.certify(problem, &s.point, &s.lambda, eta_max);
+        let factorizations = once.factorizations;
+        let again = once.certify(problem, &s.point, &s.lambda, eta_max);
+        let mut other = fresh();
+        let alone = other.certify(problem, &s.point, &s.lambda, eta_max);
+        assert_eq!(first.is_some_and(|b| b.near_zero == Some(1)), proven);
+        let bits = |b: Option<pgo::certify::SparseBound>| b.map(|b| b.lower_bound.to_bits());
+        assert_eq!(bits(again), bits(first));
+        assert_eq!(bits(alone), bits(first));
+        // Proven: nothing factored again; not proven: only the η search of the plain
+        // Cholesky certificate, not the ladder before it.
+        let repeated = once.factorizations - factorizations;
+        assert!(repeated < factorizations, "{repeated} of {factorizations}");
+        if proven {
+            assert_eq!(repeated, 0);
+        }
+    }
+}
