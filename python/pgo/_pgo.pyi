@@ -102,6 +102,19 @@ class Graph:
 class Graph3:
     """A 3D pose graph (see ``pgo.Graph3.__doc__``); ``pgo.read`` returns one for a 3D file."""
 
+    def __init__(
+        self,
+        poses: ArrayLike,
+        edges: ArrayLike,
+        measurements: ArrayLike,
+        information: Optional[ArrayLike] = None,
+        ids: Optional[ArrayLike] = None,
+        fixed: Optional[ArrayLike] = None,
+        *,
+        form: str = "g2o",
+        allow_indefinite: bool = False,
+    ) -> None: ...
+
     @property
     def poses(self) -> npt.NDArray[np.float64]:
         """(n, 7) x y z qx qy qz qw (g2o) or (n, 6) x y z roll pitch yaw (TORO), as read."""

@@ -10,7 +10,7 @@
 use numpy::ndarray::ArrayViewD;
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLikeDyn, PyArrayMethods};
 use pgo::graph::{Edge, Pose2, PoseGraph, SymMat3, VertexId};
-use pgo::graph3::{Form3, Pose3, Rotation3};
+use pgo::graph3::{Edge3, Form3, Pose3, Rotation3, SymMat6};
 use pgo::io::{self, AnyGraph, Dialect, Format, ReadOptions, ReadReport, WriteOptions};
 use pgo::vertigo::Vertigo;
 use pyo3::create_exception;
@@ -193,6 +193,65 @@ fn id_list(name: &str, a: &ArrayViewD<'_, f64>) -> PyResult<Vec<VertexId>> {
         .collect()
 }
 
+/// The ids of n poses (`ids`, or 0..n) and the order that sorts them ascending, as the readers
+/// keep poses; repeated ids refused.
+fn id_order(
+    n: usize,
+    ids: Option<&PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+) -> PyResult<(Vec<usize>, Vec<VertexId>)> {
+    let ids: Vec<VertexId> = match ids {
+        Some(a) => {
+            let ids = id_list("ids", &a.as_array())?;
+            if ids.len() != n {
+                return Err(PyValueError::new_err(format!(
+                    "ids has {} entries for {n} poses",
+                    ids.len()
+                )));
+            }
+            ids
+        }
+        None => {
+            if n > pgo::graph::MAX_VERTEX_ID as usize {
+                return Err(invalid("too many poses for g2o's ids"));
+            }
+            (0..n as VertexId).collect()
+        }
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&k| ids[k]);
+    for w in order.windows(2) {
+        if ids[w[0]] == ids[w[1]] {
+            return Err(invalid(format!("ids: vertex {} appears twice", ids[w[0]])));
+        }
+    }
+    let sorted = order.iter().map(|&k| ids[k]).collect();
+    Ok((order, sorted))
+}
+
+/// The dense index of vertex `id` among the poses' sorted ids, for the error message of `name`.
+fn pose_index(sorted_ids: &[VertexId], name: &str, id: VertexId) -> PyResult<usize> {
+    sorted_ids
+        .binary_search(&id)
+        .map_err(|_| invalid(format!("{name}: vertex {id} is not one of the poses' ids")))
+}
+
+/// The dense indices of the `fixed` ids, in their order, without repeats.
+fn fixed_indices(
+    sorted_ids: &[VertexId],
+    fixed: Option<&PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+) -> PyResult<Vec<usize>> {
+    let mut indices = Vec::new();
+    if let Some(f) = fixed {
+        for (k, id) in id_list("fixed", &f.as_array())?.into_iter().enumerate() {
+            let i = pose_index(sorted_ids, &format!("fixed[{k}]"), id)?;
+            if !indices.contains(&i) {
+                indices.push(i);
+            }
+        }
+    }
+    Ok(indices)
+}
+
 fn float_array<'py>(
     py: Python<'py>,
     v: Vec<f64>,
@@ -222,43 +281,13 @@ impl Graph {
     ) -> PyResult<Self> {
         let poses_view = poses.as_array();
         let pose_rows = matrix("poses", &poses_view, 3, None)?;
-        let n = pose_rows.len();
-        let ids: Vec<VertexId> = match &ids {
-            Some(a) => {
-                let ids = id_list("ids", &a.as_array())?;
-                if ids.len() != n {
-                    return Err(PyValueError::new_err(format!(
-                        "ids has {} entries for {n} poses",
-                        ids.len()
-                    )));
-                }
-                ids
-            }
-            None => {
-                if n > pgo::graph::MAX_VERTEX_ID as usize {
-                    return Err(invalid("too many poses for g2o's ids"));
-                }
-                (0..n as VertexId).collect()
-            }
-        };
         // Poses in ascending id order, as the reader keeps them.
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by_key(|&k| ids[k]);
-        for w in order.windows(2) {
-            if ids[w[0]] == ids[w[1]] {
-                return Err(invalid(format!("ids: vertex {} appears twice", ids[w[0]])));
-            }
-        }
-        let sorted_ids: Vec<VertexId> = order.iter().map(|&k| ids[k]).collect();
+        let (order, sorted_ids) = id_order(pose_rows.len(), ids.as_ref())?;
         let sorted_poses: Vec<Pose2> = order
             .iter()
             .map(|&k| Pose2::new(pose_rows[k][0], pose_rows[k][1], pose_rows[k][2]))
             .collect();
-        let index = |name: &str, id: VertexId| {
-            sorted_ids
-                .binary_search(&id)
-                .map_err(|_| invalid(format!("{name}: vertex {id} is not one of the poses' ids")))
-        };
+        let index = |name: &str, id: VertexId| pose_index(&sorted_ids, name, id);
 
         let edges_view = edges.as_array();
         let edge_rows = matrix("edges", &edges_view, 2, None)?;
@@ -300,18 +329,9 @@ impl Graph {
                 noise,
             });
         }
-        let mut fixed_indices = Vec::new();
-        if let Some(f) = &fixed {
-            for (k, id) in id_list("fixed", &f.as_array())?.into_iter().enumerate() {
-                let i = index(&format!("fixed[{k}]"), id)?;
-                if !fixed_indices.contains(&i) {
-                    fixed_indices.push(i);
-                }
-            }
-        }
         let mut graph = PoseGraph::with_edges(sorted_poses, graph_edges);
+        graph.fixed = fixed_indices(&sorted_ids, fixed.as_ref())?;
         graph.ids = sorted_ids;
-        graph.fixed = fixed_indices;
         Ok(Graph {
             graph,
             format: Format::G2o,
@@ -705,7 +725,14 @@ fn poses3(name: &str, a: &ArrayViewD<'_, f64>, form: Form3, n: usize) -> PyResul
 /// or x y z roll pitch yaw). The two forms are not converted into each other (not lossless).
 ///
 /// A Graph3 is immutable: its array attributes are copies. `with_poses` gives a graph with
-/// another estimate. There is no constructor from arrays yet: read a file or its text.
+/// another estimate.
+///
+/// `Graph3(poses, edges, measurements, information=None, ids=None, fixed=None, *, form="g2o",
+/// allow_indefinite=False)` builds one from arrays, as `Graph` does in 2D: poses (n, 7) or
+/// (n, 6) in `form`'s coordinates ("g2o": quaternions, "toro": Euler angles), edges (m, 2) of
+/// vertex ids, measurements as poses, information (m, 21) upper triangles (default: identity),
+/// ids (n,) (default 0..n-1), fixed ids; every information matrix must be positive definite
+/// unless `allow_indefinite`. It writes as a file of its form (g2o `.g2o`, TORO `.graph`).
 #[pyclass(module = "pgo", name = "Graph3", frozen)]
 pub struct Graph3 {
     graph: pgo::graph3::Graph3,
@@ -760,6 +787,90 @@ fn invalid_of(e: pgo::Error) -> PyErr {
 
 #[pymethods]
 impl Graph3 {
+    #[new]
+    #[pyo3(signature = (poses, edges, measurements, information=None, ids=None, fixed=None, *, form="g2o", allow_indefinite=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        poses: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        edges: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        measurements: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        information: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        ids: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        fixed: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+        form: &str,
+        allow_indefinite: bool,
+    ) -> PyResult<Self> {
+        let (form, format) = match form {
+            "g2o" => (Form3::G2o, Format::G2o),
+            "toro" => (Form3::Toro, Format::Toro),
+            other => {
+                return Err(invalid(format!(
+                    "form must be \"g2o\" (quaternions) or \"toro\" (Euler angles), found {other:?}"
+                )));
+            }
+        };
+        let poses_view = poses.as_array();
+        let n = poses_view.shape().first().copied().unwrap_or(0);
+        let rows = poses3("poses", &poses_view, form, n)?;
+        let (order, sorted_ids) = id_order(rows.len(), ids.as_ref())?;
+        let sorted_poses: Vec<Pose3> = order.iter().map(|&k| rows[k]).collect();
+
+        let edges_view = edges.as_array();
+        let edge_rows = matrix("edges", &edges_view, 2, None)?;
+        let m = edge_rows.len();
+        let measurements = poses3("measurements", &measurements.as_array(), form, m)?;
+        let information_view = information.as_ref().map(|a| a.as_array());
+        let information_rows = match &information_view {
+            Some(v) => Some(matrix("information", v, 21, Some(m))?),
+            None => None,
+        };
+        let mut identity = [0.0; 21];
+        for r in 0..6usize {
+            // Row r of the upper triangle starts after 6 + 5 + ... + (7 − r) values.
+            identity[6 * r - r * r.saturating_sub(1) / 2] = 1.0;
+        }
+        let mut graph_edges = Vec::with_capacity(m);
+        for k in 0..m {
+            let name = format!("edges[{k}]");
+            let a = vertex_id(&name, edge_rows[k][0])?;
+            let b = vertex_id(&name, edge_rows[k][1])?;
+            if a == b {
+                return Err(invalid(format!(
+                    "{name}: self-loop: edge from vertex {a} to itself"
+                )));
+            }
+            let information = SymMat6(match &information_rows {
+                Some(rows) => rows[k].as_slice().try_into().expect("21 columns checked"),
+                None => identity,
+            });
+            if !allow_indefinite && let Err(pivot) = information.check_positive_definite() {
+                return Err(invalid(format!(
+                    "information[{k}]: the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass allow_indefinite=True to accept it"
+                )));
+            }
+            graph_edges.push(Edge3 {
+                i: pose_index(&sorted_ids, &name, a)?,
+                j: pose_index(&sorted_ids, &name, b)?,
+                measurement: measurements[k],
+                information,
+            });
+        }
+        let graph = pgo::graph3::Graph3 {
+            fixed: fixed_indices(&sorted_ids, fixed.as_ref())?,
+            ids: sorted_ids,
+            poses: sorted_poses,
+            edges: graph_edges,
+            form,
+        };
+        Ok(Graph3 {
+            graph,
+            format,
+            dialect: format.default_dialect(),
+            warnings: Vec::new(),
+            source: "<arrays>".into(),
+        })
+    }
+
     /// The estimate: (n, 7) float64 `x y z qx qy qz qw` per pose for a g2o graph, (n, 6)
     /// `x y z roll pitch yaw` for a TORO one, exactly as read, in ascending id order.
     #[getter]

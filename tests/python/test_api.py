@@ -66,6 +66,7 @@ if isinstance(three, pgo.Graph3):
     rows: np.ndarray = three.information
     three.with_poses(pgo.solve(three).poses).write("grid3D-opt.g2o")
     dimension: int = pgo.certify(three).dimension + pgo.spectrum(three, 4).near_zero
+made: pgo.Graph3 = pgo.Graph3(np.tile([0.0, 0, 0, 0, 0, 0, 1], (2, 1)), [[0, 1]], [[1.0, 0, 0, 0, 0, 0, 1]], form="g2o")
 try:
     pgo.read("x.g2o")
 except pgo.ParseError as e:

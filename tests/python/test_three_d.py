@@ -298,3 +298,72 @@ def test_no_panic_on_extreme_estimates(small_solution):
         except pgo.PgoError:
             continue
         assert not c.certified
+
+
+def test_graph3_from_arrays_equals_the_file(shared_datasets, toro_file):
+    for path, form in [(shared_datasets / "smallGrid3D.g2o", "g2o"), (toro_file, "toro")]:
+        g = pgo.read(path)
+        built = pgo.Graph3(g.poses, g.edges, g.measurements, g.information, ids=g.ids, fixed=g.fixed, form=form)
+        assert built == g
+        assert built.to_text() == g.to_text()
+        assert (built.format, built.dialect, built.source) == (g.format, g.dialect, "<arrays>")
+        # Ids in any order: sorted with their poses, as the reader keeps them.
+        perm = np.random.default_rng(1).permutation(g.num_poses)
+        shuffled = pgo.Graph3(
+            g.poses[perm], g.edges, g.measurements, g.information, ids=g.ids[perm], form=form
+        )
+        assert shuffled.ids.tolist() == g.ids.tolist() and (shuffled.poses == g.poses).all()
+    g = pgo.read(shared_datasets / "smallGrid3D.g2o")
+    built = pgo.Graph3(g.poses, g.edges, g.measurements, g.information, ids=g.ids, fixed=g.fixed)
+    assert pgo.solve(built).to_dict() == pgo.solve(g).to_dict()
+
+
+def test_graph3_from_lists_by_hand():
+    # Two poses, one edge: pose 1 one metre ahead of pose 0 and turned a quarter about z; unit
+    # information by default. The measurement is consistent, so the optimum costs 0 and puts
+    # pose 1 at the measurement from pose 0 (fixed at the origin).
+    s = math.sqrt(0.5)
+    g = pgo.Graph3(
+        [[0, 0, 0, 0, 0, 0, 1], [0.5, 0.2, 0, 0, 0, 0, 1]],
+        [[0, 1]],
+        [[1, 0, 0, 0, 0, s, s]],
+        fixed=[0],
+    )
+    assert g.information.tolist() == [
+        [1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 1]
+    ]
+    solution = pgo.solve(g)
+    assert solution.certified and abs(solution.cost) < 1e-12
+    p = solution.poses[1]
+    assert np.allclose(p[:3], [1, 0, 0], atol=1e-9)
+    assert np.allclose(abs(p[3:] @ np.array([0, 0, s, s])), 1, atol=1e-9)
+
+
+def test_graph3_from_arrays_is_checked():
+    p = np.tile([0, 0, 0, 0, 0, 0, 1.0], (3, 1))
+    e = [[0, 1], [1, 2]]
+    z = [[1, 0, 0, 0, 0, 0, 1.0]] * 2
+    eye = [1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 1]
+    indefinite = list(eye)
+    indefinite[20] = -1
+    cases = [
+        (dict(poses=np.zeros((3, 6)), edges=e, measurements=z), ValueError, r"poses must have shape \(3, 7\)"),
+        (dict(poses=p, edges=e, measurements=z[:1]), ValueError, r"measurements must have shape \(2, 7\)"),
+        (dict(poses=p, edges=e, measurements=z, form="toro"), ValueError, r"poses must have shape \(3, 6\)"),
+        (dict(poses=p, edges=e, measurements=z, form="se3"), pgo.PgoError, "form must be"),
+        (dict(poses=p, edges=[[0, 0]], measurements=z[:1]), pgo.PgoError, "self-loop"),
+        (dict(poses=p, edges=[[0, 5]], measurements=z[:1]), pgo.PgoError, "vertex 5 is not one"),
+        (dict(poses=p, edges=[[0, 1.5]], measurements=z[:1]), pgo.PgoError, "not a vertex id"),
+        (dict(poses=p, edges=e, measurements=z, ids=[0, 1, 1]), pgo.PgoError, "appears twice"),
+        (dict(poses=p, edges=e, measurements=z, ids=[0, 1]), ValueError, "ids has 2 entries"),
+        (dict(poses=p, edges=e, measurements=[[1, 0, 0, 0, 0, 0, np.inf]] * 2), pgo.PgoError, "not finite"),
+        (dict(poses=p, edges=e, measurements=[[1, 0, 0, 0, 0, 0, 0]] * 2), pgo.PgoError, "cannot be normalized"),
+        (dict(poses=p, edges=e, measurements=z, information=[eye]), ValueError, r"information must have shape \(2, 21\)"),
+        (dict(poses=p, edges=e, measurements=z, information=[indefinite] * 2), pgo.PgoError, "not positive definite"),
+        (dict(poses=p, edges=e, measurements=z, fixed=[7]), pgo.PgoError, "fixed"),
+    ]
+    for kwargs, exc, message in cases:
+        with pytest.raises(exc, match=message):
+            pgo.Graph3(**kwargs)
+    g = pgo.Graph3(p, e, z, information=[indefinite] * 2, allow_indefinite=True)
+    assert g.information[0, 20] == -1
