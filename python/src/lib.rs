@@ -228,6 +228,19 @@ fn id_order(
     Ok((order, sorted))
 }
 
+/// The name (`edges[k]`) and the two vertex ids of row k of an edges array; self-loops refused.
+fn edge_ids(k: usize, row: &[f64]) -> PyResult<(String, VertexId, VertexId)> {
+    let name = format!("edges[{k}]");
+    let a = vertex_id(&name, row[0])?;
+    let b = vertex_id(&name, row[1])?;
+    if a == b {
+        return Err(invalid(format!(
+            "{name}: self-loop: edge from vertex {a} to itself"
+        )));
+    }
+    Ok((name, a, b))
+}
+
 /// The dense index of vertex `id` among the poses' sorted ids, for the error message of `name`.
 fn pose_index(sorted_ids: &[VertexId], name: &str, id: VertexId) -> PyResult<usize> {
     sorted_ids
@@ -301,14 +314,7 @@ impl Graph {
         };
         let mut graph_edges = Vec::with_capacity(m);
         for k in 0..m {
-            let name = format!("edges[{k}]");
-            let a = vertex_id(&name, edge_rows[k][0])?;
-            let b = vertex_id(&name, edge_rows[k][1])?;
-            if a == b {
-                return Err(invalid(format!(
-                    "{name}: self-loop: edge from vertex {a} to itself"
-                )));
-            }
+            let (name, a, b) = edge_ids(k, &edge_rows[k])?;
             let noise = match &information_rows {
                 Some(rows) => {
                     let r = &rows[k];
@@ -831,14 +837,7 @@ impl Graph3 {
         }
         let mut graph_edges = Vec::with_capacity(m);
         for k in 0..m {
-            let name = format!("edges[{k}]");
-            let a = vertex_id(&name, edge_rows[k][0])?;
-            let b = vertex_id(&name, edge_rows[k][1])?;
-            if a == b {
-                return Err(invalid(format!(
-                    "{name}: self-loop: edge from vertex {a} to itself"
-                )));
-            }
+            let (name, a, b) = edge_ids(k, &edge_rows[k])?;
             let information = SymMat6(match &information_rows {
                 Some(rows) => rows[k].as_slice().try_into().expect("21 columns checked"),
                 None => identity,
