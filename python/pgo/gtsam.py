@@ -56,6 +56,13 @@ def _check_graph(graph: Any, name: str) -> Union[Graph, Graph3]:
     return graph
 
 
+def _held(graph: Union[Graph, Graph3]) -> list[int]:
+    """The poses a prior holds: the FIX ones, else the smallest id (where pgo keeps the gauge)."""
+    if len(graph.fixed):
+        return [int(k) for k in graph.fixed]
+    return [int(graph.ids[0])] if graph.num_poses else []
+
+
 def _pose3(row: Any) -> Any:
     """``gtsam.Pose3`` of a g2o row x y z qx qy qz qw (the quaternion normalized)."""
     x, y, z, qx, qy, qz, qw = (float(v) for v in row)
@@ -85,7 +92,7 @@ def _to_gtsam3(graph: Graph3, prior_sigma: Optional[float]) -> Tuple[Any, Any]:
             )
         )
     if prior_sigma is not None:
-        held = list(graph.fixed) if len(graph.fixed) else ([int(ids[0])] if len(ids) else [])
+        held = _held(graph)
         noise = _gtsam.noiseModel.Isotropic.Sigma(6, float(prior_sigma))
         for key in held:
             factors.add(_gtsam.PriorFactorPose3(int(key), values.atPose3(int(key)), noise))
@@ -126,7 +133,7 @@ def to_gtsam(graph: Union[Graph, Graph3], prior_sigma: Optional[float] = None) -
             )
         )
     if prior_sigma is not None:
-        held = list(graph.fixed) if len(graph.fixed) else ([int(ids[0])] if len(ids) else [])
+        held = _held(graph)
         noise = _gtsam.noiseModel.Isotropic.Sigma(3, float(prior_sigma))
         for key in held:
             factors.add(_gtsam.PriorFactorPose2(int(key), values.atPose2(int(key)), noise))

@@ -241,6 +241,16 @@ fn edge_ids(k: usize, row: &[f64]) -> PyResult<(String, VertexId, VertexId)> {
     Ok((name, a, b))
 }
 
+/// Row k's information matrix refused unless its Cholesky factorization succeeded (`check`: the
+/// failing pivot), as the readers refuse it without --allow-indefinite.
+fn definite(k: usize, check: Result<(), usize>) -> PyResult<()> {
+    check.map_err(|pivot| {
+        invalid(format!(
+            "information[{k}]: the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass allow_indefinite=True to accept it"
+        ))
+    })
+}
+
 /// The dense index of vertex `id` among the poses' sorted ids, for the error message of `name`.
 fn pose_index(sorted_ids: &[VertexId], name: &str, id: VertexId) -> PyResult<usize> {
     sorted_ids
@@ -307,11 +317,10 @@ impl Graph {
         let m = edge_rows.len();
         let measurements_view = measurements.as_array();
         let measurement_rows = matrix("measurements", &measurements_view, 3, Some(m))?;
-        let information_view = information.as_ref().map(|a| a.as_array());
-        let information_rows = match &information_view {
-            Some(v) => Some(matrix("information", v, 6, Some(m))?),
-            None => None,
-        };
+        let information_rows = information
+            .as_ref()
+            .map(|a| matrix("information", &a.as_array(), 6, Some(m)))
+            .transpose()?;
         let mut graph_edges = Vec::with_capacity(m);
         for k in 0..m {
             let (name, a, b) = edge_ids(k, &edge_rows[k])?;
@@ -322,10 +331,8 @@ impl Graph {
                 }
                 None => SymMat3::IDENTITY,
             };
-            if !allow_indefinite && let Err(pivot) = noise.check_positive_definite() {
-                return Err(invalid(format!(
-                    "information[{k}]: the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass allow_indefinite=True to accept it"
-                )));
+            if !allow_indefinite {
+                definite(k, noise.check_positive_definite())?;
             }
             let z = &measurement_rows[k];
             graph_edges.push(Edge {
@@ -825,27 +832,19 @@ impl Graph3 {
         let edge_rows = matrix("edges", &edges_view, 2, None)?;
         let m = edge_rows.len();
         let measurements = poses3("measurements", &measurements.as_array(), form, m)?;
-        let information_view = information.as_ref().map(|a| a.as_array());
-        let information_rows = match &information_view {
-            Some(v) => Some(matrix("information", v, 21, Some(m))?),
-            None => None,
-        };
-        let mut identity = [0.0; 21];
-        for r in 0..6usize {
-            // Row r of the upper triangle starts after 6 + 5 + ... + (7 − r) values.
-            identity[6 * r - r * r.saturating_sub(1) / 2] = 1.0;
-        }
+        let information_rows = information
+            .as_ref()
+            .map(|a| matrix("information", &a.as_array(), 21, Some(m)))
+            .transpose()?;
         let mut graph_edges = Vec::with_capacity(m);
         for k in 0..m {
             let (name, a, b) = edge_ids(k, &edge_rows[k])?;
-            let information = SymMat6(match &information_rows {
-                Some(rows) => rows[k].as_slice().try_into().expect("21 columns checked"),
-                None => identity,
-            });
-            if !allow_indefinite && let Err(pivot) = information.check_positive_definite() {
-                return Err(invalid(format!(
-                    "information[{k}]: the information matrix is not positive definite (pivot {pivot} of its Cholesky factorization is not positive); pass allow_indefinite=True to accept it"
-                )));
+            let information = match &information_rows {
+                Some(rows) => SymMat6(rows[k].as_slice().try_into().expect("21 columns checked")),
+                None => SymMat6::IDENTITY,
+            };
+            if !allow_indefinite {
+                definite(k, information.check_positive_definite())?;
             }
             graph_edges.push(Edge3 {
                 i: pose_index(&sorted_ids, &name, a)?,

@@ -96,6 +96,12 @@ impl Pose3 {
 pub struct SymMat6(pub [f64; 21]);
 
 impl SymMat6 {
+    /// The 6x6 identity (ones at the upper triangle's diagonal positions 0, 6, 11, 15, 18, 20).
+    pub const IDENTITY: SymMat6 = SymMat6([
+        1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
+        1.0, 0.0, 1.0,
+    ]);
+
     /// Entry (r, c) of the symmetric matrix.
     pub fn get(&self, r: usize, c: usize) -> f64 {
         let (r, c) = if r <= c { (r, c) } else { (c, r) };
@@ -240,6 +246,19 @@ mod tests {
             }
         }
         assert_eq!(k, 21);
+    }
+
+    #[test]
+    fn the_identity_is_one_on_the_diagonal_only() {
+        for r in 0..6 {
+            for c in 0..6 {
+                assert_eq!(
+                    SymMat6::IDENTITY.get(r, c),
+                    f64::from(u8::from(r == c)),
+                    "({r}, {c})"
+                );
+            }
+        }
     }
 
     #[test]
