@@ -13,6 +13,19 @@ pub fn power_of_two_scale(a: f64) -> f64 {
     2f64.powi(-(e as i32))
 }
 
+/// The first shift of the ladder for a matrix of `n` poses with k eigenvalues at zero, when no
+/// earlier certificate of the same matrix suggests one: μ₀ = (k / (c·n))² / 16 with c = 1/10,
+/// at most 1/16 (B's diagonal lies in [1, 4)). The count of eigenvalues of an equilibrated pose
+/// graph matrix below μ grows like c·n·√(16μ) (the bending modes of a corridor: Weyl's law in
+/// one dimension), with c from 0.03 (city10000) to 0.25 (parking-garage) on the public files at
+/// μ = 1/16; at μ₀ about k lie below, so one factorization usually isolates them, where starting
+/// at 1/16 took three (the first with 100-1400 negative pivots). Only the number of
+/// factorizations depends on it: the proof holds at whatever shift [`isolate`] stops.
+pub fn first_shift(k: usize, n: usize) -> f64 {
+    let c = 0.1;
+    ((k as f64 / (c * n.max(1) as f64)).powi(2) / 16.0).min(CEILING)
+}
+
 /// The outcome of [`isolate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Ladder {
@@ -29,13 +42,18 @@ pub enum Ladder {
     Failed,
 }
 
+/// The highest shift of the ladder: B's diagonal lies in [1, 4) before the shift.
+const CEILING: f64 = 1.0 / 16.0;
+
 /// The shift ladder: μ from `start` down by 64 (by 4096 while 100 or more pivots are negative:
 /// the count of eigenvalues below μ falls like a power of μ, Weyl's law) while more than k are
-/// negative, at most 8 rungs and not below 4·`assembly`; where the rounding hides the gap at the
-/// first rung with at most k, three log-scale bisections towards the rung above. `inertia(μ)`
-/// factors B − μI: `Some(Some((negative pivots, backward error)))`, `Some(None)` on a zero pivot,
-/// `None` when the matrix cannot be formed (then no shift will do). `assembly` bounds the
-/// difference between the stored B and the exact one.
+/// negative, at most 8 rungs and not below 4·`assembly`. Where the rounding hides the gap at the
+/// first rung with at most k: up by 64 while no rung above was tried (a first shift guessed
+/// below the rounding level, [`first_shift`]), then three log-scale bisections between the
+/// hidden rung and the rung above. `inertia(μ)` factors B − μI: `Some(Some((negative pivots,
+/// backward error)))`, `Some(None)` on a zero pivot, `None` when the matrix cannot be formed
+/// (then no shift will do). `assembly` bounds the difference between the stored B and the exact
+/// one.
 pub fn isolate(
     k: usize,
     start: f64,
@@ -43,8 +61,10 @@ pub fn isolate(
     mut inertia: impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
     let mut mu = start;
-    // The last shift with more than k negative pivots, if any.
+    // The last shift with more than k negative pivots, and the last with at most k where the
+    // rounding hid the gap.
     let mut above: Option<f64> = None;
+    let mut hidden: Option<f64> = None;
     for _ in 0..8 {
         let Some(at) = inertia(mu) else {
             return Ladder::Failed;
@@ -59,33 +79,19 @@ pub fn isolate(
                         mu,
                     };
                 }
-                // The rounding hides the gap at μ; λ_{k+1} may lie well above μ (the shifts step
-                // by 64): bisect (in log scale, three times) towards the shift above.
-                if let Some(mut hi) = above {
-                    for _ in 0..3 {
-                        let mid = (mu * hi).sqrt();
-                        let Some(at) = inertia(mid) else {
-                            return Ladder::Failed;
-                        };
-                        match at {
-                            Some((negative, error)) if negative <= k => {
-                                let theta = mid - error - assembly;
-                                if theta > 0.0 {
-                                    return Ladder::Found {
-                                        theta,
-                                        negative,
-                                        mu: mid,
-                                    };
-                                }
-                                mu = mid;
-                            }
-                            _ => hi = mid,
-                        }
-                    }
+                hidden = Some(mu);
+                match above {
+                    // λ_{k+1} may lie well above μ: try higher first.
+                    None if mu < CEILING => mu = (64.0 * mu).min(CEILING),
+                    _ => return bisect(k, mu, above, assembly, &mut inertia),
                 }
-                return Ladder::Hidden { mu };
+                continue;
             }
             other => {
+                if let Some(low) = hidden {
+                    // Too many below μ, the gap hidden at the shift below: in between.
+                    return bisect(k, low, Some(mu), assembly, &mut inertia);
+                }
                 above = Some(mu);
                 let many = matches!(other, Some((negative, _)) if negative >= 100);
                 mu /= if many { 4096.0 } else { 64.0 };
@@ -95,7 +101,45 @@ pub fn isolate(
             break;
         }
     }
-    Ladder::Failed
+    match hidden {
+        Some(mu) => Ladder::Hidden { mu },
+        None => Ladder::Failed,
+    }
+}
+
+/// Three log-scale bisections between `mu` (at most k negative pivots, the gap hidden by the
+/// rounding) and the shift `above` it with more than k, if any: the first midpoint where the
+/// gap shows, else [`Ladder::Hidden`] at the highest shift with at most k.
+fn bisect(
+    k: usize,
+    mut mu: f64,
+    above: Option<f64>,
+    assembly: f64,
+    inertia: &mut impl FnMut(f64) -> Option<Option<(usize, f64)>>,
+) -> Ladder {
+    if let Some(mut hi) = above {
+        for _ in 0..3 {
+            let mid = (mu * hi).sqrt();
+            let Some(at) = inertia(mid) else {
+                return Ladder::Failed;
+            };
+            match at {
+                Some((negative, error)) if negative <= k => {
+                    let theta = mid - error - assembly;
+                    if theta > 0.0 {
+                        return Ladder::Found {
+                            theta,
+                            negative,
+                            mu: mid,
+                        };
+                    }
+                    mu = mid;
+                }
+                _ => hi = mid,
+            }
+        }
+    }
+    Ladder::Hidden { mu }
 }
 
 #[cfg(test)]
@@ -104,8 +148,12 @@ mod tests {
 
     /// A diagonal "matrix" with known eigenvalues: the inertia of B − μI counts those below μ.
     fn ladder(eigenvalues: &[f64], k: usize, error: f64) -> (Ladder, Vec<f64>) {
+        ladder_from(1.0 / 16.0, eigenvalues, k, error)
+    }
+
+    fn ladder_from(start: f64, eigenvalues: &[f64], k: usize, error: f64) -> (Ladder, Vec<f64>) {
         let mut shifts = Vec::new();
-        let l = isolate(k, 1.0 / 16.0, 0.0, |mu| {
+        let l = isolate(k, start, 0.0, |mu| {
             shifts.push(mu);
             Some(Some((
                 eigenvalues.iter().filter(|&&e| e < mu).count(),
@@ -135,5 +183,33 @@ mod tests {
         // An error above the shift: the gap is hidden.
         assert!(matches!(ladder(&eig, 3, 1.0).0, Ladder::Hidden { .. }));
         assert!((power_of_two_scale(10.0).powi(2) * 10.0 - 2.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_first_shift_below_the_rounding_climbs_and_bisects() {
+        // Hidden at 1e-8 and 6.4e-7 (error 1e-6): up by 64 until the gap shows, at 64² · 1e-8.
+        let (l, shifts) = ladder_from(1e-8, &[0.0, 1e-3, 1.0], 1, 1e-6);
+        assert_eq!(shifts, vec![1e-8, 64.0 * 1e-8, 64.0 * (64.0 * 1e-8)]);
+        assert!(matches!(l, Ladder::Found { negative: 1, .. }), "{l:?}");
+        // Hidden at 1e-7 (error 5e-7), three below 6.4e-6: bisection in between, at 8e-7.
+        let (l, shifts) = ladder_from(1e-7, &[0.0, 1e-6, 1e-6, 1.0], 1, 5e-7);
+        assert_eq!(shifts.len(), 3);
+        assert!((shifts[2] - 8e-7).abs() < 1e-18, "{shifts:?}");
+        match l {
+            Ladder::Found { theta, mu, .. } => {
+                assert_eq!(mu, shifts[2]);
+                assert!((theta - 3e-7).abs() < 1e-18, "{theta}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_first_shift_follows_the_one_dimensional_weyl_law() {
+        // (k / (n/10))² / 16, at most 1/16.
+        assert_eq!(first_shift(1, 10), 1.0 / 16.0);
+        assert!((first_shift(1, 10_000) - 1e-6 / 16.0).abs() < 1e-22);
+        assert!((first_shift(3, 5_000) - 36e-6 / 16.0).abs() < 1e-20);
+        assert_eq!(first_shift(1, 0), 1.0 / 16.0);
     }
 }
