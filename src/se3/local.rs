@@ -309,6 +309,76 @@ fn hessian(
     (values, grad)
 }
 
+/// The decrease −(gᵀδ + ½ δᵀHδ) that the quadratic model at a point predicts along δ, H applied
+/// through its stored upper triangle (`values`, in the system's pattern order).
+fn model_decrease(
+    problem: &Problem3,
+    sys: &System,
+    values: &[f64],
+    grad: &[f64],
+    delta: &[f64],
+) -> f64 {
+    let mut hd = vec![0.0; sys.dim()];
+    let mut k = 0;
+    for &(u, v) in &problem.pairs {
+        let (du, dv) = (sys.dims[u], sys.dims[v]);
+        if du == 0 || dv == 0 {
+            continue;
+        }
+        for a in 0..du {
+            for b in 0..dv {
+                if u == v && b < a {
+                    continue;
+                }
+                let (r, c) = (sys.offset[u] + a, sys.offset[v] + b);
+                let h = values[k];
+                k += 1;
+                hd[r] += h * delta[c];
+                if r != c {
+                    hd[c] += h * delta[r];
+                }
+            }
+        }
+    }
+    let gd: f64 = grad.iter().zip(delta).map(|(a, b)| a * b).sum();
+    let dhd: f64 = hd.iter().zip(delta).map(|(a, b)| a * b).sum();
+    -(gd + 0.5 * dhd)
+}
+
+/// The point x + Bδ, each rotation block retracted to the Stiefel manifold by its polar factor
+/// (translations not yet projected).
+fn retract(
+    problem: &Problem3,
+    sys: &System,
+    bases: &[Vec<f64>],
+    x: &Point3,
+    delta: &[f64],
+) -> Point3 {
+    let p = sys.p;
+    let mut trial = x.clone();
+    for u in 0..problem.n {
+        if sys.dims[u] == 0 {
+            continue;
+        }
+        let d = &delta[sys.offset[u]..sys.offset[u + 1]];
+        let mut v = vec![0.0; 4 * p];
+        for (a, &da) in d.iter().enumerate() {
+            for (vk, bk) in v.iter_mut().zip(&bases[u][a * 4 * p..(a + 1) * 4 * p]) {
+                *vk += da * bk;
+            }
+        }
+        for l in 0..4 {
+            let r = problem.local_row(u, l).expect("not the anchor");
+            for c in 0..p {
+                trial.x[r * p + c] += v[l * p + c];
+            }
+        }
+        let r0 = problem.rotation_row(u, 0);
+        polar_rows(&mut trial.x[r0 * p..(r0 + 3) * p], p);
+    }
+    trial
+}
+
 /// Options of [`optimize`].
 #[derive(Debug, Clone, Copy)]
 pub struct LocalOptions {
@@ -351,6 +421,7 @@ pub fn optimize(
         };
     }
     let mut fresh = true;
+    let mut chord_next = false;
     let (mut values, mut grad, mut bases) = (Vec::new(), Vec::new(), Vec::new());
     while iterations < options.max_iterations {
         if fresh {
@@ -366,73 +437,45 @@ pub fn optimize(
             converged = true;
             break;
         }
-        // (H + μ D) δ = −g, D = max(|diag H|, floor).
-        let dmax = sys
-            .diagonal
-            .iter()
-            .fold(0.0f64, |m, &k| m.max(values[k].abs()));
-        let mut damped = values.clone();
-        for &k in &sys.diagonal {
-            damped[k] += mu * values[k].abs().max(1e-12 * dmax);
-        }
-        sys.assembly.fill(&damped);
-        work += sys.factor.multiply_adds();
-        if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
-            mu = (mu * nu).max(1e-8);
-            nu *= 2.0;
-            iterations += 1;
-            continue;
-        }
-        let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
-        sys.solve_in_place(&mut delta);
-        // Predicted decrease −(gᵀδ + ½ δᵀHδ), H applied through the stored upper triangle.
-        let mut hd = vec![0.0; dim];
-        let mut k = 0;
-        for &(u, v) in &problem.pairs {
-            let (du, dv) = (sys.dims[u], sys.dims[v]);
-            if du == 0 || dv == 0 {
-                continue;
-            }
-            for a in 0..du {
-                for b in 0..dv {
-                    if u == v && b < a {
-                        continue;
-                    }
-                    let (r, c) = (sys.offset[u] + a, sys.offset[v] + b);
-                    let h = values[k];
-                    k += 1;
-                    hd[r] += h * delta[c];
-                    if r != c {
-                        hd[c] += h * delta[r];
-                    }
+        let negligible = |predicted: f64| predicted <= 1e-12 * cost + 1e-24 * total_weight;
+        // The chord step: after a step that gained less than 1e-6 f, quadratic convergence leaves
+        // a decrease below f's rounding, and the factorization of the point just left finds that
+        // last step as well as a new one would (the Hessian moved by the length of that step).
+        let chord = std::mem::take(&mut chord_next)
+            .then(|| {
+                let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
+                sys.solve_in_place(&mut delta);
+                let predicted = model_decrease(problem, &sys, &values, &grad, &delta);
+                (predicted >= 0.0 && negligible(predicted)).then_some((delta, predicted))
+            })
+            .flatten();
+        let (delta, predicted) = match chord {
+            Some(step) => step,
+            None => {
+                // (H + μ D) δ = −g, D = max(|diag H|, floor).
+                let dmax = sys
+                    .diagonal
+                    .iter()
+                    .fold(0.0f64, |m, &k| m.max(values[k].abs()));
+                let mut damped = values.clone();
+                for &k in &sys.diagonal {
+                    damped[k] += mu * values[k].abs().max(1e-12 * dmax);
                 }
-            }
-        }
-        let gd: f64 = grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
-        let dhd: f64 = hd.iter().zip(&delta).map(|(a, b)| a * b).sum();
-        let predicted = -(gd + 0.5 * dhd);
-        // Trial point.
-        let mut trial = x.clone();
-        for u in 0..problem.n {
-            if sys.dims[u] == 0 {
-                continue;
-            }
-            let d = &delta[sys.offset[u]..sys.offset[u + 1]];
-            let mut v = vec![0.0; 4 * p];
-            for (a, &da) in d.iter().enumerate() {
-                for (vk, bk) in v.iter_mut().zip(&bases[u][a * 4 * p..(a + 1) * 4 * p]) {
-                    *vk += da * bk;
+                sys.assembly.fill(&damped);
+                work += sys.factor.multiply_adds();
+                if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
+                    mu = (mu * nu).max(1e-8);
+                    nu *= 2.0;
+                    iterations += 1;
+                    continue;
                 }
+                let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
+                sys.solve_in_place(&mut delta);
+                let predicted = model_decrease(problem, &sys, &values, &grad, &delta);
+                (delta, predicted)
             }
-            for l in 0..4 {
-                let r = problem.local_row(u, l).expect("not the anchor");
-                for c in 0..p {
-                    trial.x[r * p + c] += v[l * p + c];
-                }
-            }
-            let r0 = problem.rotation_row(u, 0);
-            polar_rows(&mut trial.x[r0 * p..(r0 + 3) * p], p);
-        }
+        };
+        let mut trial = retract(problem, &sys, &bases, &x, &delta);
         translations.project(problem, &mut trial);
         let trial_cost = problem.cost(&trial);
         iterations += 1;
@@ -449,13 +492,14 @@ pub fn optimize(
             gradient_norm,
             damping: mu,
         });
-        let negligible = predicted <= 1e-12 * cost + 1e-24 * total_weight;
+        let negligible = negligible(predicted);
         if negligible && (actual.is_nan() || actual <= 0.0) {
             // Converged: no step predicts a decrease above the rounding of f.
             converged = true;
             break;
         }
         if rho > 1e-4 || (actual >= 0.0 && negligible) {
+            chord_next = actual <= 1e-6 * cost;
             x = trial;
             cost = trial_cost;
             fresh = true;

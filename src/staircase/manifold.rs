@@ -116,6 +116,37 @@ impl TangentBasis {
         }
     }
 
+    /// δᵀHδ for H = 2 Bᵀ W̃(λ) B (the undamped [`TangentBasis::hessian_values`]): 2 (v*W̃v −
+    /// Σ_k λ_k ‖v_k‖²) over the rotation rows k, v = Bδ.
+    pub fn hessian_form(&self, problem: &Problem, lambda: &[f64], delta: &[f64]) -> f64 {
+        let p = self.p;
+        let rows = self.offsets.len() - 1;
+        let mut v = vec![c64::new(0.0, 0.0); rows * p];
+        for k in 0..rows {
+            for s in 0..self.len(k) {
+                let d = delta[self.offsets[k] + s];
+                for (vc, bc) in v[k * p..(k + 1) * p].iter_mut().zip(self.vector(k, s)) {
+                    *vc += bc * d;
+                }
+            }
+        }
+        let row = |k: usize| &v[k * p..(k + 1) * p];
+        let mut form = 0.0;
+        for &(k, l, w) in &problem.upper {
+            let t: f64 = row(k)
+                .iter()
+                .zip(row(l))
+                .map(|(a, b)| (a.conj() * w * b).re)
+                .sum();
+            form += if k == l { t } else { 2.0 * t };
+        }
+        let positions = problem.positions();
+        for (k, l) in lambda.iter().enumerate() {
+            form -= l * row(positions + k).iter().map(|a| a.norm_sqr()).sum::<f64>();
+        }
+        2.0 * form
+    }
+
     /// The damping weights D (diag(2 W̃_kk) per coordinate).
     pub fn damping(&self, problem: &Problem) -> Vec<f64> {
         let mut d = vec![0.0; self.dim];
@@ -249,6 +280,78 @@ impl NewtonSystem {
         self.factor.solve_in_place(&mut self.permuted);
         for (p, &old) in self.permuted.iter().zip(&self.order) {
             b[old] = *p;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{Edge, Pose2, PoseGraph, SymMat3};
+    use crate::problem::weights::{Weights, edge_weights};
+
+    #[test]
+    fn the_hessian_form_is_the_second_derivative_along_the_retraction() {
+        // A noisy square with a diagonal, at a point away from its optimum.
+        let edge = |i, j, x, y, t| Edge {
+            i,
+            j,
+            measurement: Pose2::new(x, y, t),
+            noise: SymMat3::IDENTITY,
+        };
+        let edges = vec![
+            edge(0, 1, 1.0, 0.1, 1.5),
+            edge(1, 2, 1.1, -0.1, 1.6),
+            edge(2, 3, 0.9, 0.0, 1.5),
+            edge(3, 0, 1.0, 0.2, 1.7),
+            edge(0, 2, 1.4, 1.5, 3.0),
+        ];
+        let mut g = PoseGraph::with_edges(vec![Pose2::IDENTITY; 4], edges);
+        g.initialize_spanning_tree();
+        let problem = Problem::new(&g, &edge_weights(&g, Weights::Isotropic).unwrap());
+        for p in [1, 3] {
+            // Positions and unit rotation rows from a fixed sequence.
+            let rows = problem.rows();
+            let mut x: Vec<c64> = (0..rows * p)
+                .map(|k| c64::new((k as f64 * 0.7).sin(), (k as f64 * 1.3).cos()))
+                .collect();
+            for k in problem.positions()..rows {
+                let row = &mut x[k * p..(k + 1) * p];
+                let norm = row.iter().map(|a| a.norm_sqr()).sum::<f64>().sqrt();
+                row.iter_mut().for_each(|a| *a /= norm);
+            }
+            let x = Point { p, x };
+            let basis = TangentBasis::new(&problem, &x);
+            let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
+            let delta: Vec<f64> = (0..basis.dim)
+                .map(|k| ((k * 37 % 11) as f64 - 5.0) / 10.0)
+                .collect();
+            let form = basis.hessian_form(&problem, &lambda, &delta);
+            // The same quadratic form from the assembled upper triangle of H.
+            let mut values = Vec::new();
+            basis.hessian_values(&problem, &lambda, 0.0, &mut values);
+            let assembled: f64 = basis
+                .hessian_pattern(&problem)
+                .iter()
+                .zip(&values)
+                .map(|(&(a, b), v)| if a == b { 1.0 } else { 2.0 } * v * delta[a] * delta[b])
+                .sum();
+            assert!(
+                (form - assembled).abs() <= 1e-12 * assembled.abs(),
+                "{form} {assembled}"
+            );
+            // d²/dt² f(R(x, tδ)) at t = 0 (the retraction is of second order), by a central
+            // second difference.
+            let f = |t: f64| {
+                let d: Vec<f64> = delta.iter().map(|v| t * v).collect();
+                problem.cost(&basis.retract(&x, &d, problem.positions()))
+            };
+            let t = 1e-4;
+            let second = (f(t) - 2.0 * f(0.0) + f(-t)) / (t * t);
+            assert!(
+                (second - form).abs() <= 1e-5 * form.abs(),
+                "p {p}: {second} {form}"
+            );
         }
     }
 }

@@ -505,6 +505,7 @@ pub fn optimize_within(
     let mut gauss_newton = std::env::var_os("PGO_NO_GN").is_none();
     let mut iterations = 0;
     let mut converged = false;
+    let mut chord_next = false;
     let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
     while iterations < max_iterations {
         if norm(&at.grad) == 0.0 {
@@ -512,23 +513,46 @@ pub fn optimize_within(
             break;
         }
         iterations += 1;
-        let model = if gauss_newton { &zeros } else { &at.lambda };
-        system.update(problem, &at.basis, model, mu);
-        if system.factorize().is_err() {
-            mu = (mu * 10.0).max(1e-9);
-            if mu > 1e12 {
-                break;
+        let small = |predicted: f64| predicted <= stop_tolerance * at.cost + 1e-24 * weight_scale;
+        // The chord step: after an exact Newton step that gained less than 1e-6 f, quadratic
+        // convergence leaves a decrease below the stopping rule, and the factorization of the
+        // point just left finds that last step as well as a new one would (the Hessian moved by
+        // the length of that step). Its model decrease takes δᵀHδ at the current point.
+        let chord = std::mem::take(&mut chord_next)
+            .then(|| {
+                let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
+                system.solve_in_place(&mut delta);
+                let gd: f64 = at.grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
+                let dhd = at.basis.hessian_form(problem, &at.lambda, &delta);
+                let predicted = -gd - 0.5 * dhd;
+                (predicted >= 0.0 && small(predicted)).then_some((delta, dhd))
+            })
+            .flatten();
+        let (delta, chord_curvature) = match chord {
+            Some((delta, dhd)) => (delta, Some(dhd)),
+            None => {
+                let model = if gauss_newton { &zeros } else { &at.lambda };
+                system.update(problem, &at.basis, model, mu);
+                if system.factorize().is_err() {
+                    mu = (mu * 10.0).max(1e-9);
+                    if mu > 1e12 {
+                        break;
+                    }
+                    continue;
+                }
+                let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
+                system.solve_in_place(&mut delta);
+                (delta, None)
             }
-            continue;
-        }
-        let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
-        system.solve_in_place(&mut delta);
-        // The model's decrease along αδ, (H + μD)δ = −g: m(0) − m(αδ) = −α gᵀδ − ½α² δᵀHδ
-        // with δᵀHδ = −gᵀδ − μ δᵀDδ.
+        };
+        // The model's decrease along αδ: m(0) − m(αδ) = −α gᵀδ − ½α² δᵀHδ, where (H + μD)δ = −g
+        // gives δᵀHδ = −gᵀδ − μ δᵀDδ.
         let gd: f64 = at.grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
         let dd: f64 = damping.iter().zip(&delta).map(|(a, b)| a * b * b).sum();
-        let predicted_at =
-            |alpha: f64| alpha * (1.0 - 0.5 * alpha) * -gd + 0.5 * alpha * alpha * mu * dd;
+        let predicted_at = |alpha: f64| match chord_curvature {
+            Some(dhd) => -alpha * gd - 0.5 * alpha * alpha * dhd,
+            None => alpha * (1.0 - 0.5 * alpha) * -gd + 0.5 * alpha * alpha * mu * dd,
+        };
         let predicted = predicted_at(1.0);
         let mut trial = at.basis.retract(&at.x, &delta, problem.positions());
         project(&mut trial);
@@ -541,9 +565,10 @@ pub fn optimize_within(
             gradient_norm: norm(&at.grad),
             damping: mu,
         });
-        let small = predicted <= stop_tolerance * at.cost + 1e-24 * weight_scale;
+        let small = small(predicted);
         if rho > 1e-4 && predicted > 0.0 {
             let gain = at.cost - trial_cost;
+            chord_next = !gauss_newton && chord_curvature.is_none() && gain <= 1e-6 * at.cost;
             at = Iterate::new(problem, trial, trial_cost);
             mu = (mu * fastest_decrease.max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-12);
             nu = 2.0;
