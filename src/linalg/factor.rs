@@ -164,19 +164,35 @@ impl<T: Scalar> SparseFactor<T> {
         };
         let symbolic = factorize_symbolic_cholesky(pattern, Side::Upper, ordering, params)
             .expect("the symbolic analysis of a square pattern cannot fail but for memory");
+        let mut factor = SparseFactor {
+            symbolic,
+            side: Side::Upper,
+            values: Vec::new(),
+            mem: MemBuffer::new(StackReq::EMPTY),
+            state: State::None,
+        };
+        factor.allocate();
+        factor
+    }
+
+    /// Room for the numeric factor and the factorizations' and solves' workspace.
+    fn allocate(&mut self) {
+        let symbolic = &self.symbolic;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<T>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<T>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<T>(1, Par::Seq),
         ]);
-        let values = vec![T::zero_impl(); symbolic.len_val()];
-        SparseFactor {
-            symbolic,
-            side: Side::Upper,
-            values,
-            mem: MemBuffer::new(req),
-            state: State::None,
-        }
+        self.values = vec![T::zero_impl(); symbolic.len_val()];
+        self.mem = MemBuffer::new(req);
+    }
+
+    /// Frees the numeric factor and the workspace but keeps the analysis (the next factorization
+    /// allocates them again): for a factor kept for later while others take the memory.
+    pub fn release(&mut self) {
+        self.values = Vec::new();
+        self.mem = MemBuffer::new(StackReq::EMPTY);
+        self.state = State::None;
     }
 
     /// The number of entries the factor stores (its fill, with a supernodal layout's zeros).
@@ -223,6 +239,9 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn llt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
+        if self.values.len() != self.symbolic.len_val() {
+            self.allocate();
+        }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_llt(
             &mut self.values,
@@ -247,6 +266,9 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn ldlt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
+        if self.values.len() != self.symbolic.len_val() {
+            self.allocate();
+        }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_ldlt(
             &mut self.values,
@@ -729,6 +751,38 @@ mod tests {
             (f.ldlt_backward_error(), f.inertia_below(0.0))
         })
         .collect()
+    }
+
+    #[test]
+    fn a_released_factor_factors_and_solves_again() {
+        // tridiag(−1, 2, −1) x = (1, …, 1): x_k = k(n + 1 − k)/2 (the discrete Poisson problem).
+        let n = 50;
+        let mut entries = Vec::new();
+        let mut values = Vec::new();
+        for k in 0..n {
+            entries.push((k, k));
+            values.push(2.0);
+            if k + 1 < n {
+                entries.push((k, k + 1));
+                values.push(-1.0);
+            }
+        }
+        let mut assembly = Assembly::<f64>::new(n, &entries);
+        assembly.fill(&values);
+        let mut f = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
+        let mut solve = |f: &mut SparseFactor<f64>| {
+            f.llt(assembly.matrix.as_ref()).unwrap();
+            let mut b = vec![1.0; n];
+            f.solve_in_place(&mut b);
+            b
+        };
+        let first = solve(&mut f);
+        for (k, x) in first.iter().enumerate() {
+            let exact = ((k + 1) * (n - k)) as f64 / 2.0;
+            assert!((x - exact).abs() <= 1e-10 * exact, "{k}: {x} {exact}");
+        }
+        f.release();
+        assert_eq!(solve(&mut f), first);
     }
 
     #[test]

@@ -459,12 +459,50 @@ pub fn optimize_to(
 /// [`StaircaseOptions::min_descent_steps`] (nor more than `options.max_iterations`).
 pub fn optimize_within(
     problem: &Problem,
+    positions: Option<&mut OptimalPositions>,
+    start: Point,
+    options: &StaircaseOptions,
+    observer: &mut dyn FnMut(&Iteration),
+    stop_tolerance: f64,
+    work_limit: Option<f64>,
+) -> Local {
+    optimize_in(
+        problem,
+        positions,
+        start,
+        options,
+        observer,
+        stop_tolerance,
+        work_limit,
+        &mut None,
+    )
+}
+
+/// The Newton system of `basis`'s rank: the one in `system` if it is of that rank (its pattern
+/// and symbolic factorization depend on nothing else), else a new one, kept there.
+fn system_for<'a>(
+    system: &'a mut Option<NewtonSystem>,
+    problem: &Problem,
+    basis: &TangentBasis,
+) -> &'a mut NewtonSystem {
+    if system.as_ref().is_some_and(|s| s.factor.dim() == basis.dim) {
+        return system.as_mut().expect("checked");
+    }
+    system.insert(NewtonSystem::new(problem, basis))
+}
+
+/// [`optimize_within`] with the Newton system of an earlier call at the same rank (at 10⁶ poses
+/// its analysis takes longer than three factorizations).
+#[allow(clippy::too_many_arguments)]
+fn optimize_in(
+    problem: &Problem,
     mut positions: Option<&mut OptimalPositions>,
     start: Point,
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
     stop_tolerance: f64,
     work_limit: Option<f64>,
+    system: &mut Option<NewtonSystem>,
 ) -> Local {
     let mut project = |x: &mut Point| {
         if let Some(positions) = positions.as_deref_mut() {
@@ -478,7 +516,7 @@ pub fn optimize_within(
     let cost = problem.cost(&start);
     let mut at = Iterate::new(problem, start, cost);
     let damping = at.basis.damping(problem);
-    let mut system = NewtonSystem::new(problem, &at.basis);
+    let system = system_for(system, problem, &at.basis);
     let step_work = system.factor.multiply_adds();
     let max_iterations = match work_limit {
         Some(w) => options.max_iterations.min(
@@ -662,12 +700,17 @@ impl Iterate {
 /// of [`optimize_to`] cannot see further steps; the certificate can, as its loss grows with the
 /// square of the residual W̃(λ)x ([`SparseCertifier::certify_rank_one`]).
 pub fn polish(problem: &Problem, local: Local) -> Local {
+    polish_in(problem, local, &mut None)
+}
+
+/// [`polish`] with the rank-1 Newton system of an earlier call.
+fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>) -> Local {
     let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
     let mut local = local;
     // The basis and gradient at the current point, carried from one step to the next.
     let mut basis = TangentBasis::new(problem, &local.point);
     let mut grad = basis.coordinates(&problem.half_gradient(&local.point));
-    let mut system = NewtonSystem::new(problem, &basis);
+    let system = system_for(system, problem, &basis);
     for _ in 0..4 {
         system.update(problem, &basis, &local.lambda, 1e-10);
         if system.factorize().is_err() {
@@ -714,7 +757,8 @@ pub fn solve_from(
     let mut positions = OptimalPositions::new(problem);
     crate::progress::phase("Newton");
     // The first descent gets the budget but its reserve (below), and min_descent_steps at least.
-    let mut local = optimize_within(
+    let mut rank_one = None;
+    let mut local = optimize_in(
         problem,
         positions.as_mut(),
         start,
@@ -722,7 +766,13 @@ pub fn solve_from(
         observer,
         1e-12,
         Some(0.75 * options.staircase_budget),
+        &mut rank_one,
     );
+    // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
+    // the certificate's.
+    if let Some(system) = rank_one.as_mut() {
+        system.factor.release();
+    }
     let mut iterations = local.iterations;
     // The work so far in multiply-adds (the staircase's budget): Newton's factorizations, one
     // rank-1 step each, and the certificate's below.
@@ -749,7 +799,9 @@ pub fn solve_from(
         // The estimate's eigenvalue is isolated but Temple's inequality fell short of the
         // tolerance: a residual that Newton's cost-based stopping rule left.
         let before = local.iterations;
-        local = polish(problem, local);
+        local = polish_in(problem, local, &mut rank_one);
+        // Its memory goes to the certificate's factor again.
+        rank_one = None;
         if local.iterations > before {
             iterations += local.iterations - before;
             newton_work += (local.iterations - before) as f64 * rank_1_step;
@@ -758,6 +810,7 @@ pub fn solve_from(
                 .or(first);
         }
     }
+    drop(rank_one);
     if let Some(bound) = first {
         return finish(
             local,
