@@ -770,7 +770,7 @@ mod tests {
         let mut assembly = Assembly::<f64>::new(n, &entries);
         assembly.fill(&values);
         let mut f = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
-        let mut solve = |f: &mut SparseFactor<f64>| {
+        let solve = |f: &mut SparseFactor<f64>| {
             f.llt(assembly.matrix.as_ref()).unwrap();
             let mut b = vec![1.0; n];
             f.solve_in_place(&mut b);
