@@ -66,19 +66,10 @@ pub fn isolate(
     let mut above: Option<f64> = None;
     let mut hidden: Option<f64> = None;
     for _ in 0..8 {
-        let Some(at) = inertia(mu) else {
-            return Ladder::Failed;
-        };
-        match at {
-            Some((negative, error)) if negative <= k => {
-                let theta = mu - error - assembly;
-                if theta > 0.0 {
-                    return Ladder::Found {
-                        theta,
-                        negative,
-                        mu,
-                    };
-                }
+        match rung(k, mu, assembly, &mut inertia) {
+            Rung::Proven(found) => return found,
+            Rung::Failed => return Ladder::Failed,
+            Rung::Hidden => {
                 hidden = Some(mu);
                 match above {
                     // λ_{k+1} may lie well above μ: try higher first.
@@ -87,13 +78,12 @@ pub fn isolate(
                 }
                 continue;
             }
-            other => {
+            Rung::Above { many } => {
                 if let Some(low) = hidden {
                     // Too many below μ, the gap hidden at the shift below: in between.
                     return bisect(k, low, Some(mu), assembly, &mut inertia);
                 }
                 above = Some(mu);
-                let many = matches!(other, Some((negative, _)) if negative >= 100);
                 mu /= if many { 4096.0 } else { 64.0 };
             }
         }
@@ -104,6 +94,44 @@ pub fn isolate(
     match hidden {
         Some(mu) => Ladder::Hidden { mu },
         None => Ladder::Failed,
+    }
+}
+
+/// What one factorization of B − μI shows.
+enum Rung {
+    /// At most k negative pivots and θ = μ − ‖E‖ > 0: [`Ladder::Found`].
+    Proven(Ladder),
+    /// At most k negative pivots, but θ ≤ 0.
+    Hidden,
+    /// More than k negative pivots (`many`: 100 or more), or a zero pivot.
+    Above { many: bool },
+    /// The matrix could not be formed.
+    Failed,
+}
+
+fn rung(
+    k: usize,
+    mu: f64,
+    assembly: f64,
+    inertia: &mut impl FnMut(f64) -> Option<Option<(usize, f64)>>,
+) -> Rung {
+    match inertia(mu) {
+        None => Rung::Failed,
+        Some(Some((negative, error))) if negative <= k => {
+            let theta = mu - error - assembly;
+            if theta > 0.0 {
+                Rung::Proven(Ladder::Found {
+                    theta,
+                    negative,
+                    mu,
+                })
+            } else {
+                Rung::Hidden
+            }
+        }
+        Some(other) => Rung::Above {
+            many: matches!(other, Some((negative, _)) if negative >= 100),
+        },
     }
 }
 
@@ -120,22 +148,11 @@ fn bisect(
     if let Some(mut hi) = above {
         for _ in 0..3 {
             let mid = (mu * hi).sqrt();
-            let Some(at) = inertia(mid) else {
-                return Ladder::Failed;
-            };
-            match at {
-                Some((negative, error)) if negative <= k => {
-                    let theta = mid - error - assembly;
-                    if theta > 0.0 {
-                        return Ladder::Found {
-                            theta,
-                            negative,
-                            mu: mid,
-                        };
-                    }
-                    mu = mid;
-                }
-                _ => hi = mid,
+            match rung(k, mid, assembly, inertia) {
+                Rung::Proven(found) => return found,
+                Rung::Failed => return Ladder::Failed,
+                Rung::Hidden => mu = mid,
+                Rung::Above { .. } => hi = mid,
             }
         }
     }
