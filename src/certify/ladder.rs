@@ -13,6 +13,13 @@ pub fn power_of_two_scale(a: f64) -> f64 {
     2f64.powi(-(e as i32))
 }
 
+/// The shift the ladder starts from: 64 times the `last` one that isolated the k eigenvalues of
+/// an earlier certificate of the same graph (its gap may have grown since), else
+/// [`first_shift`]; at most 1/16.
+pub fn start_shift(k: usize, n: usize, last: Option<f64>) -> f64 {
+    last.map_or(first_shift(k, n), |m| (64.0 * m).min(CEILING))
+}
+
 /// The first shift of the ladder for a matrix of `n` poses with k eigenvalues at zero, when no
 /// earlier certificate of the same matrix suggests one: μ₀ = (k / (c·n))² / 16 with c = 1/10,
 /// at most 1/16 (B's diagonal lies in [1, 4)). The count of eigenvalues of an equilibrated pose
@@ -228,5 +235,12 @@ mod tests {
         assert!((first_shift(1, 10_000) - 1e-6 / 16.0).abs() < 1e-22);
         assert!((first_shift(3, 5_000) - 36e-6 / 16.0).abs() < 1e-20);
         assert_eq!(first_shift(1, 0), 1.0 / 16.0);
+        // After an earlier certificate: 64 times its shift, at most 1/16.
+        assert_eq!(start_shift(1, 10_000, None), first_shift(1, 10_000));
+        assert_eq!(
+            start_shift(1, 10_000, Some(0.5f64.powi(20))),
+            0.5f64.powi(14)
+        );
+        assert_eq!(start_shift(3, 10, Some(0.5f64.powi(8))), 1.0 / 16.0);
     }
 }

@@ -1,4 +1,4 @@
-use crate::certify::ladder::{Ladder, first_shift, isolate, power_of_two_scale};
+use crate::certify::ladder::{Ladder, isolate, power_of_two_scale, start_shift};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -238,9 +238,9 @@ impl SparseCertifier {
     /// ([`SparseFactor::ldlt_backward_error`]) plus the rounding of B's diagonal plus the
     /// difference between the stored W̃ and the exact Σ_e of the edges' terms
     /// ([`assembly_error`]); so λ₂ of the exact D W̃(λ) D is at least θ = μ − ‖E‖. With no negative
-    /// pivot, λ₁ ≥ θ and W̃(λ) ≻ 0 outright. μ starts at 64 times the last μ that worked, else at
-    /// [`first_shift`] for the graph's size, and the ladder ([`isolate`]) moves it until at most
-    /// one pivot is negative (at most 8 factorizations, usually one).
+    /// pivot, λ₁ ≥ θ and W̃(λ) ≻ 0 outright. μ starts at [`start_shift`] (64 times the last μ that
+    /// worked, else a shift for the graph's size), and the ladder ([`isolate`]) moves it until at
+    /// most one pivot is negative (at most 8 factorizations, usually one).
     fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let key: Vec<u64> = lambda.iter().map(|l| l.to_bits()).collect();
         if let Some((last, gap)) = &self.last_gap
@@ -256,11 +256,7 @@ impl SparseCertifier {
     /// [`Self::gap`] without the memo: the shift ladder.
     fn gap_by_inertia(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
-        let start = self
-            .last_mu
-            .map_or(first_shift(1, self.diagonal.len() / 2), |m| {
-                (64.0 * m).min(1.0 / 16.0)
-            });
+        let start = start_shift(1, self.diagonal.len() / 2, self.last_mu);
         match isolate(1, start, assembly, |mu| self.inertia_at(lambda, scale, mu)) {
             Ladder::Found {
                 theta,

@@ -33,7 +33,7 @@
 //! [`crate::certify::SparseCertifier::certify_cholesky`]).
 
 use super::problem::{Point3, Problem3};
-use crate::certify::ladder::{Ladder, first_shift, isolate, power_of_two_scale};
+use crate::certify::ladder::{Ladder, isolate, power_of_two_scale, start_shift};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
 use crate::linalg::roundoff::{U, gamma};
 
@@ -219,9 +219,7 @@ impl Certifier3 {
         n1: usize,
     ) -> Option<(f64, usize)> {
         let assembly = self.assembly_error(scale);
-        let start = self
-            .last_mu
-            .map_or(first_shift(k, n1 + 1), |m| (64.0 * m).min(1.0 / 16.0));
+        let start = start_shift(k, n1 + 1, self.last_mu);
         match isolate(k, start, assembly, |mu| {
             Some(self.inertia_at(lambda, scale, mu, n1))
         }) {
