@@ -13,11 +13,52 @@ pub fn power_of_two_scale(a: f64) -> f64 {
     2f64.powi(-(e as i32))
 }
 
-/// The shift the ladder starts from: 64 times the `last` one that isolated the k eigenvalues of
-/// an earlier certificate of the same graph (its gap may have grown since), else
-/// [`first_shift`]; at most 1/16.
-pub fn start_shift(k: usize, n: usize, last: Option<f64>) -> f64 {
-    last.map_or(first_shift(k, n), |m| (64.0 * m).min(CEILING))
+/// Where a certifier's next ladder starts: what its last successful one found.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ShiftMemory {
+    /// The shift that isolated the k eigenvalues last time.
+    last: Option<f64>,
+    /// The lowest shift of that ladder with more than k below it, if it tried one.
+    above: Option<f64>,
+}
+
+impl ShiftMemory {
+    /// The shift to start from: where none worked yet, [`first_shift`]; else 64 times the last
+    /// one (its gap may have grown since, and a larger shift proves a larger θ), unless that
+    /// ladder already saw more than k eigenvalues below a shift within those 64 times (the gap
+    /// of a nearby point seldom moves that far): then the last shift itself. At most 1/16.
+    pub fn start(&self, k: usize, n: usize) -> f64 {
+        match (self.last, self.above) {
+            (None, _) => first_shift(k, n),
+            (Some(m), Some(a)) if a <= 64.0 * m => m.min(CEILING),
+            (Some(m), _) => (64.0 * m).min(CEILING),
+        }
+    }
+
+    /// Records a ladder's outcome: a [`Ladder::Found`] becomes the next start; anything else
+    /// leaves the memory as it was.
+    pub fn remember(&mut self, ladder: &Ladder) {
+        if let Ladder::Found { mu, above, .. } = *ladder {
+            *self = ShiftMemory {
+                last: Some(mu),
+                above,
+            };
+        }
+    }
+
+    /// Records a shift proven outside the ladder (the double-double retry).
+    pub fn remember_shift(&mut self, mu: f64) {
+        *self = ShiftMemory {
+            last: Some(mu),
+            above: None,
+        };
+    }
+
+    /// The next ladder is for the same gap (the same minimum, polished): it starts at the last
+    /// shift itself.
+    pub fn hold(&mut self) {
+        self.above = self.above.or(self.last);
+    }
 }
 
 /// The first shift of the ladder for a matrix of `n` poses with k eigenvalues at zero, when no
@@ -41,6 +82,8 @@ pub enum Ladder {
         theta: f64,
         negative: usize,
         mu: f64,
+        /// The lowest shift tried with more than k below it, if any.
+        above: Option<f64>,
     },
     /// At most k pivots are negative at μ, but the rounding hides the gap there (the caller may
     /// retry in higher precision).
@@ -55,9 +98,9 @@ const CEILING: f64 = 1.0 / 16.0;
 /// The shift ladder: μ from `start` down by 64 (by 4096 while 100 or more pivots are negative:
 /// the count of eigenvalues below μ falls like a power of μ, Weyl's law) while more than k are
 /// negative, at most 8 rungs and not below 4·`assembly`. Where the rounding hides the gap at the
-/// first rung with at most k: up by 64 while no rung above was tried (a first shift guessed
-/// below the rounding level, [`first_shift`]), then three log-scale bisections between the
-/// hidden rung and the rung above. `inertia(μ)` factors B − μI: `Some(Some((negative pivots,
+/// first rung with at most k: up while no rung above was tried (a first shift guessed below the
+/// rounding level, [`first_shift`]), to twice the error bound that rung showed (by 2 to 64),
+/// then three log-scale bisections between the hidden rung and the rung above. `inertia(μ)` factors B − μI: `Some(Some((negative pivots,
 /// backward error)))`, `Some(None)` on a zero pivot, `None` when the matrix cannot be formed
 /// (then no shift will do). `assembly` bounds the difference between the stored B and the exact
 /// one.
@@ -68,19 +111,29 @@ pub fn isolate(
     mut inertia: impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
     let mut mu = start;
-    // The last shift with more than k negative pivots, and the last with at most k where the
+    // The lowest shift with more than k negative pivots, and the last with at most k where the
     // rounding hid the gap.
     let mut above: Option<f64> = None;
     let mut hidden: Option<f64> = None;
     for _ in 0..8 {
         match rung(k, mu, assembly, &mut inertia) {
-            Rung::Proven(found) => return found,
+            Rung::Proven { theta, negative } => {
+                return Ladder::Found {
+                    theta,
+                    negative,
+                    mu,
+                    above,
+                };
+            }
             Rung::Failed => return Ladder::Failed,
-            Rung::Hidden => {
+            Rung::Hidden { floor } => {
                 hidden = Some(mu);
                 match above {
-                    // λ_{k+1} may lie well above μ: try higher first.
-                    None if mu < CEILING => mu = (64.0 * mu).min(CEILING),
+                    // λ_{k+1} may lie well above μ: try higher first, at twice the level the
+                    // rounding showed (θ = μ − floor then is that level), up by 64 at most.
+                    None if mu < CEILING => {
+                        mu = (2.0 * floor).clamp(2.0 * mu, 64.0 * mu).min(CEILING)
+                    }
                     _ => return bisect(k, mu, above, assembly, &mut inertia),
                 }
                 continue;
@@ -107,9 +160,9 @@ pub fn isolate(
 /// What one factorization of B − μI shows.
 enum Rung {
     /// At most k negative pivots and θ = μ − ‖E‖ > 0: [`Ladder::Found`].
-    Proven(Ladder),
-    /// At most k negative pivots, but θ ≤ 0.
-    Hidden,
+    Proven { theta: f64, negative: usize },
+    /// At most k negative pivots, but θ ≤ 0: the error bound ‖E‖ (`floor`) is at least μ.
+    Hidden { floor: f64 },
     /// More than k negative pivots (`many`: 100 or more), or a zero pivot.
     Above { many: bool },
     /// The matrix could not be formed.
@@ -127,13 +180,11 @@ fn rung(
         Some(Some((negative, error))) if negative <= k => {
             let theta = mu - error - assembly;
             if theta > 0.0 {
-                Rung::Proven(Ladder::Found {
-                    theta,
-                    negative,
-                    mu,
-                })
+                Rung::Proven { theta, negative }
             } else {
-                Rung::Hidden
+                Rung::Hidden {
+                    floor: error + assembly,
+                }
             }
         }
         Some(other) => Rung::Above {
@@ -148,7 +199,7 @@ fn rung(
 fn bisect(
     k: usize,
     mut mu: f64,
-    above: Option<f64>,
+    mut above: Option<f64>,
     assembly: f64,
     inertia: &mut impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
@@ -156,10 +207,20 @@ fn bisect(
         for _ in 0..3 {
             let mid = (mu * hi).sqrt();
             match rung(k, mid, assembly, inertia) {
-                Rung::Proven(found) => return found,
+                Rung::Proven { theta, negative } => {
+                    return Ladder::Found {
+                        theta,
+                        negative,
+                        mu: mid,
+                        above,
+                    };
+                }
                 Rung::Failed => return Ladder::Failed,
-                Rung::Hidden => mu = mid,
-                Rung::Above { .. } => hi = mid,
+                Rung::Hidden { .. } => mu = mid,
+                Rung::Above { .. } => {
+                    hi = mid;
+                    above = Some(mid);
+                }
             }
         }
     }
@@ -210,22 +271,75 @@ mod tests {
     }
 
     #[test]
-    fn a_first_shift_below_the_rounding_climbs_and_bisects() {
-        // Hidden at 1e-8 and 6.4e-7 (error 1e-6): up by 64 until the gap shows, at 64² · 1e-8.
+    fn a_first_shift_below_the_rounding_climbs_to_twice_its_error_and_bisects() {
+        // Hidden at 1e-8 (error 1e-6): up to 2e-6 but by 64 at most, so 6.4e-7, hidden again,
+        // then 2e-6, where θ = 2e-6 − 1e-6 is proven.
         let (l, shifts) = ladder_from(1e-8, &[0.0, 1e-3, 1.0], 1, 1e-6);
-        assert_eq!(shifts, vec![1e-8, 64.0 * 1e-8, 64.0 * (64.0 * 1e-8)]);
-        assert!(matches!(l, Ladder::Found { negative: 1, .. }), "{l:?}");
-        // Hidden at 1e-7 (error 5e-7), three below 6.4e-6: bisection in between, at 8e-7.
-        let (l, shifts) = ladder_from(1e-7, &[0.0, 1e-6, 1e-6, 1.0], 1, 5e-7);
-        assert_eq!(shifts.len(), 3);
-        assert!((shifts[2] - 8e-7).abs() < 1e-18, "{shifts:?}");
+        assert_eq!(shifts, vec![1e-8, 64.0 * 1e-8, 2e-6]);
         match l {
-            Ladder::Found { theta, mu, .. } => {
-                assert_eq!(mu, shifts[2]);
-                assert!((theta - 3e-7).abs() < 1e-18, "{theta}");
+            Ladder::Found {
+                theta, mu, above, ..
+            } => {
+                assert_eq!((mu, above), (2e-6, None));
+                assert!((theta - 1e-6).abs() < 1e-20, "{theta}");
             }
             other => panic!("{other:?}"),
         }
+        // Hidden at 1e-7 (error 5e-7), up to 1e-6 where three lie below (8e-7 twice): bisection
+        // between 1e-7 and 1e-6, hidden at √(1e-13) ≈ 3.2e-7, proven at √(3.2e-7 · 1e-6) ≈ 5.6e-7.
+        let (l, shifts) = ladder_from(1e-7, &[0.0, 8e-7, 8e-7, 1.0], 1, 5e-7);
+        let (m1, m2) = (
+            (1e-7f64 * 1e-6).sqrt(),
+            ((1e-7f64 * 1e-6).sqrt() * 1e-6).sqrt(),
+        );
+        assert_eq!(shifts, vec![1e-7, 1e-6, m1, m2]);
+        match l {
+            Ladder::Found {
+                theta, mu, above, ..
+            } => {
+                assert_eq!((mu, above), (m2, Some(1e-6)));
+                assert!((theta - (m2 - 5e-7)).abs() < 1e-20, "{theta}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_next_ladder_starts_where_the_last_one_ended() {
+        let mut memory = ShiftMemory::default();
+        assert_eq!(memory.start(1, 10_000), first_shift(1, 10_000));
+        let found = |mu: f64, above: Option<f64>| Ladder::Found {
+            theta: mu / 2.0,
+            negative: 1,
+            mu,
+            above,
+        };
+        // Nothing above tried: 64 times the last shift, at most 1/16.
+        memory.remember(&found(0.5f64.powi(20), None));
+        assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
+        // Too many below a shift 8 times the last: the last shift itself.
+        memory.remember(&found(0.5f64.powi(20), Some(0.5f64.powi(17))));
+        assert_eq!(memory.start(1, 10_000), 0.5f64.powi(20));
+        // Too many only 1024 times above: 64 times again.
+        memory.remember(&found(0.5f64.powi(20), Some(0.5f64.powi(10))));
+        assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
+        // A failed or hidden ladder leaves the memory; a large shift is capped at 1/16.
+        memory.remember(&Ladder::Failed);
+        memory.remember(&Ladder::Hidden { mu: 1.0 });
+        assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
+        memory.remember(&found(0.5f64.powi(8), None));
+        assert_eq!(memory.start(3, 10), 1.0 / 16.0);
+        memory.remember_shift(0.5f64.powi(30));
+        assert_eq!(memory.start(3, 10), 0.5f64.powi(24));
+        // Held for the same gap: the last shift itself, until a ladder is remembered again.
+        memory.hold();
+        assert_eq!(memory.start(3, 10), 0.5f64.powi(30));
+        memory.remember(&found(0.5f64.powi(20), None));
+        assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
+        // Nothing to hold before any shift worked.
+        let mut fresh = ShiftMemory::default();
+        fresh.hold();
+        assert_eq!(fresh.start(1, 10_000), first_shift(1, 10_000));
     }
 
     #[test]
@@ -235,12 +349,5 @@ mod tests {
         assert!((first_shift(1, 10_000) - 1e-6 / 16.0).abs() < 1e-22);
         assert!((first_shift(3, 5_000) - 36e-6 / 16.0).abs() < 1e-20);
         assert_eq!(first_shift(1, 0), 1.0 / 16.0);
-        // After an earlier certificate: 64 times its shift, at most 1/16.
-        assert_eq!(start_shift(1, 10_000, None), first_shift(1, 10_000));
-        assert_eq!(
-            start_shift(1, 10_000, Some(0.5f64.powi(20))),
-            0.5f64.powi(14)
-        );
-        assert_eq!(start_shift(3, 10, Some(0.5f64.powi(8))), 1.0 / 16.0);
     }
 }

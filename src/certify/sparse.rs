@@ -1,4 +1,4 @@
-use crate::certify::ladder::{Ladder, isolate, power_of_two_scale, start_shift};
+use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -39,8 +39,8 @@ pub struct SparseCertifier {
     values: Vec<c64>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
-    /// The shift μ of the last successful [`Self::gap`], where the next one starts looking.
-    last_mu: Option<f64>,
+    /// What the last successful [`Self::gap`] found, where the next one starts looking.
+    shifts: ShiftMemory,
     /// The fill-reducing order of the rows.
     order: Vec<usize>,
     /// Whether the last [`Self::certify_rank_one`] isolated one eigenvalue of W̃(λ) (whatever
@@ -97,7 +97,7 @@ impl SparseCertifier {
             entries: upper.to_vec(),
             values: Vec::with_capacity(upper.len()),
             factorizations: 0,
-            last_mu: None,
+            shifts: ShiftMemory::default(),
             last_gap: None,
             order: order.to_vec(),
             isolated: false,
@@ -238,9 +238,10 @@ impl SparseCertifier {
     /// ([`SparseFactor::ldlt_backward_error`]) plus the rounding of B's diagonal plus the
     /// difference between the stored W̃ and the exact Σ_e of the edges' terms
     /// ([`assembly_error`]); so λ₂ of the exact D W̃(λ) D is at least θ = μ − ‖E‖. With no negative
-    /// pivot, λ₁ ≥ θ and W̃(λ) ≻ 0 outright. μ starts at [`start_shift`] (64 times the last μ that
-    /// worked, else a shift for the graph's size), and the ladder ([`isolate`]) moves it until at
-    /// most one pivot is negative (at most 8 factorizations, usually one).
+    /// pivot, λ₁ ≥ θ and W̃(λ) ≻ 0 outright. μ starts where the last ladder ended
+    /// ([`ShiftMemory::start`]), else at a shift for the graph's size, and the ladder
+    /// ([`isolate`]) moves it until at most one pivot is negative (at most 8 factorizations,
+    /// usually one).
     fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let key: Vec<u64> = lambda.iter().map(|l| l.to_bits()).collect();
         if let Some((last, gap)) = &self.last_gap
@@ -256,20 +257,24 @@ impl SparseCertifier {
     /// [`Self::gap`] without the memo: the shift ladder.
     fn gap_by_inertia(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
-        let start = start_shift(1, self.diagonal.len() / 2, self.last_mu);
-        match isolate(1, start, assembly, |mu| self.inertia_at(lambda, scale, mu)) {
+        let start = self.shifts.start(1, self.diagonal.len() / 2);
+        let ladder = isolate(1, start, assembly, |mu| self.inertia_at(lambda, scale, mu));
+        self.shifts.remember(&ladder);
+        match ladder {
             Ladder::Found {
-                theta,
-                negative,
-                mu,
-            } => {
-                self.last_mu = Some(mu);
-                Some(Gap::new(negative, theta))
-            }
+                theta, negative, ..
+            } => Some(Gap::new(negative, theta)),
             // Double precision's rounding hides the gap: the same shift in double-double.
             Ladder::Hidden { mu } => self.precise_gap(lambda, scale, mu, assembly),
             Ladder::Failed => None,
         }
+    }
+
+    /// The next certificate is of the same minimum, polished (multipliers moved by its last
+    /// residual): its ladder starts at the shift that isolated this one's gap
+    /// ([`ShiftMemory::hold`]).
+    pub fn hold_shift(&mut self) {
+        self.shifts.hold();
     }
 
     /// One LDLᴴ of D W̃(λ) D − μI in double precision: `Some((negative pivots, error))` with
@@ -371,7 +376,7 @@ impl SparseCertifier {
                 if negative <= 1 {
                     let theta = mu - factor.ldlt_backward_error() - assembly - form;
                     return (theta > 0.0).then(|| {
-                        self.last_mu = Some(mu);
+                        self.shifts.remember_shift(mu);
                         Gap::new(negative, theta)
                     });
                 }

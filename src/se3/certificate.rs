@@ -33,7 +33,7 @@
 //! [`crate::certify::SparseCertifier::certify_cholesky`]).
 
 use super::problem::{Point3, Problem3};
-use crate::certify::ladder::{Ladder, isolate, power_of_two_scale, start_shift};
+use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
 use crate::linalg::roundoff::{U, gamma};
 
@@ -62,7 +62,7 @@ pub struct Certifier3 {
     values: Vec<f64>,
     /// Row sums of D|Q|D's assembly bound, before scaling (per entry abs kept in `entries`).
     max_degree: usize,
-    last_mu: Option<f64>,
+    shifts: ShiftMemory,
     pub factorizations: usize,
 }
 
@@ -102,7 +102,7 @@ impl Certifier3 {
             factor,
             values: Vec::new(),
             max_degree: problem.max_degree,
-            last_mu: None,
+            shifts: ShiftMemory::default(),
             factorizations: 0,
         }
     }
@@ -219,18 +219,15 @@ impl Certifier3 {
         n1: usize,
     ) -> Option<(f64, usize)> {
         let assembly = self.assembly_error(scale);
-        let start = start_shift(k, n1 + 1, self.last_mu);
-        match isolate(k, start, assembly, |mu| {
+        let start = self.shifts.start(k, n1 + 1);
+        let ladder = isolate(k, start, assembly, |mu| {
             Some(self.inertia_at(lambda, scale, mu, n1))
-        }) {
+        });
+        self.shifts.remember(&ladder);
+        match ladder {
             Ladder::Found {
-                theta,
-                negative,
-                mu,
-            } => {
-                self.last_mu = Some(mu);
-                Some((theta, negative))
-            }
+                theta, negative, ..
+            } => Some((theta, negative)),
             Ladder::Hidden { .. } | Ladder::Failed => None,
         }
     }
