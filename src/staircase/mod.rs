@@ -699,6 +699,12 @@ impl Iterate {
 /// at most 4. Near the end the cost changes by less than its own rounding, so the stopping rule
 /// of [`optimize_to`] cannot see further steps; the certificate can, as its loss grows with the
 /// square of the residual W̃(λ)x ([`SparseCertifier::certify_rank_one`]).
+///
+/// After a step that cut the gradient a thousandfold, the next one is a chord step (the
+/// factorization of the point just left, whose Hessian differs by the length of that step):
+/// quadratic convergence leaves the next exact step a further cut of that order, which the
+/// chord step matches, so where it does not even halve the gradient, the rounding of the
+/// gradient is reached and the polish ends without another factorization.
 pub fn polish(problem: &Problem, local: Local) -> Local {
     polish_in(problem, local, &mut None)
 }
@@ -711,10 +717,13 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
     let mut basis = TangentBasis::new(problem, &local.point);
     let mut grad = basis.coordinates(&problem.half_gradient(&local.point));
     let system = system_for(system, problem, &basis);
+    let mut chord = false;
     for _ in 0..4 {
-        system.update(problem, &basis, &local.lambda, 1e-10);
-        if system.factorize().is_err() {
-            break;
+        if !chord {
+            system.update(problem, &basis, &local.lambda, 1e-10);
+            if system.factorize().is_err() {
+                break;
+            }
         }
         // (H + μD)δ = −2Bᵀg: the Riemannian gradient is twice the half gradient's coordinates.
         let mut delta: Vec<f64> = grad.iter().map(|v| -2.0 * v).collect();
@@ -727,6 +736,7 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
         if !(norm(&grad_trial) < 0.5 * norm(&grad) && cost <= local.cost * (1.0 + 1e-12)) {
             break;
         }
+        chord = norm(&grad_trial) <= 1e-3 * norm(&grad);
         local = Local {
             lambda: problem.multipliers(&trial, &g_trial),
             point: trial,
@@ -791,13 +801,15 @@ pub fn solve_from(
     // staircase.
     let reach_1 = reach(&certifier, &local);
     crate::progress::phase("certificate");
-    let mut first = certifier.certify(problem, &local.point, &local.lambda, reach_1);
+    let mut first = certifier.certify_rank_one(problem, &local.point, &local.lambda, reach_1);
     if certifier.isolated
         && first
             .is_none_or(|b| local.cost - b.lower_bound > options.tolerance * local.cost.max(1.0))
     {
         // The estimate's eigenvalue is isolated but Temple's inequality fell short of the
-        // tolerance: a residual that Newton's cost-based stopping rule left.
+        // tolerance: a residual that Newton's cost-based stopping rule left. The shifted
+        // factorization's proof (below) waits for the polished point: its η must also cover the
+        // negative eigenvalue of order ‖residual‖²/θ that the residual leaves in W̃(λ).
         let before = local.iterations;
         local = polish_in(problem, local, &mut rank_one);
         // Its memory goes to the certificate's factor again.
@@ -805,12 +817,16 @@ pub fn solve_from(
         if local.iterations > before {
             iterations += local.iterations - before;
             newton_work += (local.iterations - before) as f64 * rank_1_step;
+            certifier.hold_shift();
             first = certifier
-                .certify(problem, &local.point, &local.lambda, reach_1)
+                .certify_rank_one(problem, &local.point, &local.lambda, reach_1)
                 .or(first);
         }
     }
     drop(rank_one);
+    if first.is_none() {
+        first = certifier.certify_cholesky(&local.lambda, &local.point.x, 1, reach_1);
+    }
     if let Some(bound) = first {
         return finish(
             local,
