@@ -416,22 +416,18 @@ impl<T: Scalar> SparseFactor<T> {
     /// their own rounding: O(nnz(L)), no second factorization.
     pub fn ldlt_backward_error(&self) -> f64 {
         let dim = self.dim();
-        let modulus = T::moduli(&self.values);
-        // (|Lᴴ|1)_j·|d_j| column by column, then the rows of |L| times it.
-        let mut scaled = vec![0.0; dim];
+        // (|Lᴴ|1)_j·|d_j| from column j alone, then column j's part of the rows of |L| times it:
+        // one pass over the factor, the moduli of one column at a time.
+        let mut rows_sum = vec![0.0; dim];
         let mut row_count = vec![1usize; dim];
+        let mut m = Vec::new();
         self.visit_ldlt_columns(|j, rows, first| {
-            let m = &modulus[first..first + rows.len()];
-            scaled[j] = m[0] * (1.0 + m[1..].iter().sum::<f64>());
-            for &i in &rows[1..] {
-                row_count[i] += 1;
-            }
-        });
-        let mut rows_sum = scaled.clone();
-        self.visit_ldlt_columns(|j, rows, first| {
-            let m = &modulus[first..first + rows.len()];
+            T::moduli_into(&self.values[first..first + rows.len()], &mut m);
+            let scaled = m[0] * (1.0 + m[1..].iter().sum::<f64>());
+            rows_sum[j] += scaled;
             for (&i, &l) in rows[1..].iter().zip(&m[1..]) {
-                rows_sum[i] += l * scaled[j];
+                rows_sum[i] += l * scaled;
+                row_count[i] += 1;
             }
         });
         let (u, k_max) = (
@@ -522,9 +518,10 @@ pub trait Scalar:
     fn re(self) -> f64;
     /// The modulus.
     fn modulus(self) -> f64;
-    /// The moduli of a slice.
-    fn moduli(values: &[Self]) -> Vec<f64> {
-        values.iter().map(|v| v.modulus()).collect()
+    /// The moduli of a slice, into `out` (cleared first).
+    fn moduli_into(values: &[Self], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(values.iter().map(|v| v.modulus()));
     }
     /// The unit roundoff of the arithmetic, for the error bounds of [`SparseFactor`].
     const UNIT_ROUNDOFF: f64 = crate::linalg::roundoff::U;
@@ -571,19 +568,19 @@ impl Scalar for faer::c64 {
         }
     }
     /// As [`Scalar::modulus`], the square roots in one branch-free (vectorized) pass.
-    fn moduli(values: &[Self]) -> Vec<f64> {
-        let mut m: Vec<f64> = values.iter().map(|v| v.re * v.re + v.im * v.im).collect();
-        for s in m.iter_mut() {
+    fn moduli_into(values: &[Self], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(values.iter().map(|v| v.re * v.re + v.im * v.im));
+        for s in out.iter_mut() {
             *s = s.sqrt();
         }
         // Where the square underflowed or overflowed (and at zeros): the careful modulus.
         let smallest = f64::MIN_POSITIVE.sqrt();
-        for (m, v) in m.iter_mut().zip(values) {
+        for (m, v) in out.iter_mut().zip(values) {
             if !(*m >= smallest && m.is_finite()) {
                 *m = v.modulus();
             }
         }
-        m
     }
 }
 
