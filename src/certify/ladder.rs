@@ -61,6 +61,31 @@ impl ShiftMemory {
     }
 }
 
+/// The smallest j in 0..=`top` with `proves(j)`, for a test that holds from some j on (a
+/// shifted factorization η_j = η₀·2^j of a matrix whose PSD-ness is monotone in η), or `None` if
+/// it fails at `top`: j = 0 first (the common case: a proof at the resolution), then `top` (if
+/// even that fails, none will), then bisection between. At most 2 + ⌈log₂ top⌉ tests. Where
+/// rounding makes the test not quite monotone, the j returned still passed it.
+pub fn smallest_doubling(top: i32, mut proves: impl FnMut(i32) -> bool) -> Option<i32> {
+    if proves(0) {
+        return Some(0);
+    }
+    if top <= 0 || !proves(top) {
+        return None;
+    }
+    // Fails at lo, holds at hi.
+    let (mut lo, mut hi) = (0, top);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if proves(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(hi)
+}
+
 /// The first shift of the ladder for a matrix of `n` poses with k eigenvalues at zero, when no
 /// earlier certificate of the same matrix suggests one: μ₀ = (k / (c·n))² / 16 with c = 1/10,
 /// at most 1/16 (B's diagonal lies in [1, 4)). The count of eigenvalues of an equilibrated pose
@@ -340,6 +365,28 @@ mod tests {
         let mut fresh = ShiftMemory::default();
         fresh.hold();
         assert_eq!(fresh.start(1, 10_000), first_shift(1, 10_000));
+    }
+
+    #[test]
+    fn the_smallest_doubling_is_the_one_a_scan_upward_finds() {
+        // Every threshold t (the test holds from j = t on; t > top: never) against the scan
+        // j = 0, 1, ... that certify_cholesky ran before, with the number of tests.
+        for top in 0..=79 {
+            for t in 0..=top + 1 {
+                let mut tests = 0;
+                let found = smallest_doubling(top, |j| {
+                    tests += 1;
+                    j >= t
+                });
+                let scan = (0..=top).find(|&j| j >= t);
+                assert_eq!(found, scan, "top {top}, threshold {t}");
+                let bound = 2 + (top.max(1) as f64).log2().ceil() as i32;
+                assert!(tests <= bound, "top {top}, threshold {t}: {tests} tests");
+            }
+        }
+        // A negative top (the search range is empty above j = 0): only j = 0 is tried.
+        assert_eq!(smallest_doubling(-1, |j| j >= 0), Some(0));
+        assert_eq!(smallest_doubling(-1, |j| j >= 1), None);
     }
 
     #[test]
