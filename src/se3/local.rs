@@ -464,7 +464,11 @@ pub fn optimize(
                 sys.assembly.fill(&damped);
                 work += sys.factor.multiply_adds();
                 if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
-                    mu = (mu * nu).max(1e-8);
+                    // H + μD is not positive definite: at least β = 1e-3 relative to D, then
+                    // doubling (Nocedal and Wright's Algorithm 3.3, Cholesky with added multiple
+                    // of the identity). Doubling from 1e-6 took four failed factorizations, each
+                    // as dear as a successful one, on sphere_bignoise's chordal start.
+                    mu = (mu * nu).max(1e-3);
                     nu *= 2.0;
                     iterations += 1;
                     continue;
