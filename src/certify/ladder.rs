@@ -125,10 +125,10 @@ const CEILING: f64 = 1.0 / 16.0;
 /// negative, at most 8 rungs and not below 4·`assembly`. Where the rounding hides the gap at the
 /// first rung with at most k: up while no rung above was tried (a first shift guessed below the
 /// rounding level, [`first_shift`]), to twice the error bound that rung showed (by 2 to 64),
-/// then three log-scale bisections between the hidden rung and the rung above. `inertia(μ)` factors B − μI: `Some(Some((negative pivots,
-/// backward error)))`, `Some(None)` on a zero pivot, `None` when the matrix cannot be formed
-/// (then no shift will do). `assembly` bounds the difference between the stored B and the exact
-/// one.
+/// then three log-scale bisections between the hidden rung and the rung above. `inertia(μ)`
+/// factors B − μI: `Some(Some((negative pivots, backward error)))`, `Some(None)` on a zero pivot,
+/// `None` when the matrix cannot be formed (then no shift will do). `assembly` bounds the
+/// difference between the stored B and the exact one.
 pub fn isolate(
     k: usize,
     start: f64,

@@ -151,9 +151,9 @@ impl SparseCertifier {
         self.certify_cholesky(lambda, &x.x, x.p, eta_max)
     }
 
-    /// Tries to prove W̃(λ) + ηP ⪰ 0 for η = 1.25·η_res·2^j ≤ `eta_max`, j < 80 ([`Self::resolution`];
-    /// beyond a factor 1e24 above it, no useful bound), by one LLᴴ each; returns the smallest η
-    /// proven. W̃(λ) + ηP ⪰ 0 for every η above one where it holds (P ⪰ 0), so j is found by
+    /// Tries to prove W̃(λ) + ηP ⪰ 0 for η = 1.25·η_res·2^j ≤ `eta_max`, j < 80
+    /// ([`Self::resolution`]; beyond a factor 1e24 above it, no useful bound), by one LLᴴ each;
+    /// returns the smallest η proven. W̃(λ) + ηP ⪰ 0 for every η above one where it holds (P ⪰ 0), so j is found by
     /// bisection ([`smallest_doubling`]): at most 9 factorizations where a scan upward took one
     /// per doubling (40 and more where the relaxation is not exact).
     pub fn certify_cholesky(

@@ -702,8 +702,8 @@ impl Iterate {
 ///
 /// After a step that cut the gradient a thousandfold, the next one is a chord step (the
 /// factorization of the point just left, whose Hessian differs by the length of that step):
-/// quadratic convergence leaves the next exact step a further cut of that order, which the
-/// chord step matches, so where it does not even halve the gradient, the rounding of the
+/// quadratic convergence leaves the next exact step a further cut of that order, which a chord
+/// step comes close to, so where it does not even halve the gradient, the rounding of the
 /// gradient is reached and the polish ends without another factorization.
 pub fn polish(problem: &Problem, local: Local) -> Local {
     polish_in(problem, local, &mut None)
