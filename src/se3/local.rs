@@ -441,14 +441,16 @@ pub fn optimize(
         // The chord step: after a step that gained less than 1e-6 f, quadratic convergence leaves
         // a decrease below f's rounding, and the factorization of the point just left finds that
         // last step as well as a new one would (the Hessian moved by the length of that step).
+        // δ = −(the last factorization)⁻¹ g and the decrease the model at x predicts along it.
+        let step = |sys: &mut System| {
+            let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
+            sys.solve_in_place(&mut delta);
+            let predicted = model_decrease(problem, sys, &values, &grad, &delta);
+            (delta, predicted)
+        };
         let chord = std::mem::take(&mut chord_next)
-            .then(|| {
-                let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
-                sys.solve_in_place(&mut delta);
-                let predicted = model_decrease(problem, &sys, &values, &grad, &delta);
-                (predicted >= 0.0 && negligible(predicted)).then_some((delta, predicted))
-            })
-            .flatten();
+            .then(|| step(&mut sys))
+            .filter(|&(_, predicted)| predicted >= 0.0 && negligible(predicted));
         let (delta, predicted) = match chord {
             Some(step) => step,
             None => {
@@ -473,10 +475,7 @@ pub fn optimize(
                     iterations += 1;
                     continue;
                 }
-                let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
-                sys.solve_in_place(&mut delta);
-                let predicted = model_decrease(problem, &sys, &values, &grad, &delta);
-                (delta, predicted)
+                step(&mut sys)
             }
         };
         let mut trial = retract(problem, &sys, &bases, &x, &delta);

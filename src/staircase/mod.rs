@@ -125,7 +125,7 @@ pub struct Local {
     /// The multiply-adds of one factorization of the Newton system at this rank
     /// ([`SparseFactor::multiply_adds`]).
     pub step_work: f64,
-    /// Whether a work limit ([`optimize_within`]), not convergence, ended the descent.
+    /// Whether a work limit ([`optimize_in`]), not convergence, ended the descent.
     pub limited: bool,
 }
 
@@ -443,29 +443,6 @@ pub fn optimize_to(
     observer: &mut dyn FnMut(&Iteration),
     stop_tolerance: f64,
 ) -> Local {
-    optimize_within(
-        problem,
-        positions,
-        start,
-        options,
-        observer,
-        stop_tolerance,
-        None,
-    )
-}
-
-/// As [`optimize_to`], within `work_limit` multiply-adds of its factorizations when given: at
-/// most work_limit / (one factorization's multiply-adds) steps, and never fewer than
-/// [`StaircaseOptions::min_descent_steps`] (nor more than `options.max_iterations`).
-pub fn optimize_within(
-    problem: &Problem,
-    positions: Option<&mut OptimalPositions>,
-    start: Point,
-    options: &StaircaseOptions,
-    observer: &mut dyn FnMut(&Iteration),
-    stop_tolerance: f64,
-    work_limit: Option<f64>,
-) -> Local {
     optimize_in(
         problem,
         positions,
@@ -473,7 +450,7 @@ pub fn optimize_within(
         options,
         observer,
         stop_tolerance,
-        work_limit,
+        None,
         &mut None,
     )
 }
@@ -491,8 +468,11 @@ fn system_for<'a>(
     system.insert(NewtonSystem::new(problem, basis))
 }
 
-/// [`optimize_within`] with the Newton system of an earlier call at the same rank (at 10⁶ poses
-/// its analysis takes longer than three factorizations).
+/// As [`optimize_to`], within `work_limit` multiply-adds of its factorizations when given: at
+/// most work_limit / (one factorization's multiply-adds) steps, and never fewer than
+/// [`StaircaseOptions::min_descent_steps`] (nor more than `options.max_iterations`); with the
+/// Newton system of an earlier call at the same rank in `system` (at 10⁶ poses its analysis
+/// takes longer than three factorizations).
 #[allow(clippy::too_many_arguments)]
 fn optimize_in(
     problem: &Problem,
@@ -556,10 +536,15 @@ fn optimize_in(
         // convergence leaves a decrease below the stopping rule, and the factorization of the
         // point just left finds that last step as well as a new one would (the Hessian moved by
         // the length of that step). Its model decrease takes δᵀHδ at the current point.
+        // δ = −(the last factorization)⁻¹ g.
+        let direction = |system: &mut NewtonSystem| {
+            let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
+            system.solve_in_place(&mut delta);
+            delta
+        };
         let chord = std::mem::take(&mut chord_next)
             .then(|| {
-                let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
-                system.solve_in_place(&mut delta);
+                let delta = direction(system);
                 let gd: f64 = at.grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
                 let dhd = at.basis.hessian_form(problem, &at.lambda, &delta);
                 let predicted = -gd - 0.5 * dhd;
@@ -578,9 +563,7 @@ fn optimize_in(
                     }
                     continue;
                 }
-                let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
-                system.solve_in_place(&mut delta);
-                (delta, None)
+                (direction(system), None)
             }
         };
         // The model's decrease along αδ: m(0) − m(αδ) = −α gᵀδ − ½α² δᵀHδ, where (H + μD)δ = −g
