@@ -1,3 +1,6 @@
+#[global_allocator]
+static ALLOCATOR: pgo::cli::allocator::Allocator = pgo::cli::allocator::Allocator;
+
 fn main() -> std::process::ExitCode {
     pgo::cli::eval::main()
 }
