@@ -623,6 +623,153 @@ impl<T: Scalar> Assembly<T> {
         Self::from_entries(dim, entries)
     }
 
+    /// [`Assembly::permuted`] for a matrix of dense blocks: block u spans `sizes[u]` coordinates
+    /// (consecutive, blocks in index order), `blocks` lists the pairs (u, v), u ≤ v, whose block
+    /// is in the pattern (duplicates allowed), and `order` orders the blocks (`order[new] = old`;
+    /// each block's coordinates stay together, in their order). The entries, in the order
+    /// [`Assembly::fill`] receives their values: for each pair (u, v) of `blocks`, for a < sizes[u],
+    /// for b < sizes[v], coordinate (a of u, b of v), only a ≤ b within a diagonal block (u = v).
+    ///
+    /// The same pattern and slots as [`Assembly::permuted`] given every entry and the expanded
+    /// order, built from the blocks: one sort of the pairs instead of one of the entries (6×6
+    /// blocks in 3D, 21 to 36 entries each). At 10⁶ planar poses the entrywise sort took 2.3 s.
+    pub fn blocked(
+        sizes: &[usize],
+        blocks: &[(usize, usize)],
+        order: &[usize],
+        side: Side,
+    ) -> Self {
+        let nb = sizes.len();
+        // Each block's position in the new order, and the new coordinate of its first row.
+        let mut position = vec![0usize; nb];
+        for (new, &old) in order.iter().enumerate() {
+            position[old] = new;
+        }
+        let mut first = vec![0usize; nb + 1];
+        for (new, &old) in order.iter().enumerate() {
+            first[new + 1] = first[new] + sizes[old];
+        }
+        let dim = first[nb];
+        // The pairs as (row, col) block positions of the stored triangle, bucketed by column and
+        // sorted within it: the block-level pattern, and where each pair lands in it.
+        let stored = |&(u, v): &(usize, usize)| {
+            debug_assert!(u <= v);
+            let (a, b) = (position[u], position[v]);
+            match side {
+                Side::Upper => (a.min(b), a.max(b)),
+                Side::Lower => (a.max(b), a.min(b)),
+            }
+        };
+        let mut start = vec![0usize; nb + 1];
+        for pair in blocks {
+            start[stored(pair).1 + 1] += 1;
+        }
+        for c in 0..nb {
+            start[c + 1] += start[c];
+        }
+        let mut by_column = vec![(0usize, 0usize); blocks.len()];
+        let mut next = start.clone();
+        for (k, pair) in blocks.iter().enumerate() {
+            let (r, c) = stored(pair);
+            by_column[next[c]] = (r, k);
+            next[c] += 1;
+        }
+        // Per pair: its column, and the coordinate rows above it in each of that column's
+        // coordinate columns (off-diagonal blocks only: the diagonal block's count varies with
+        // the coordinate column, `diagonal_before` says whether to add it).
+        let mut above = vec![0usize; blocks.len()];
+        let mut diagonal_before = vec![false; blocks.len()];
+        // Per block column: its distinct block rows.
+        let mut rows_start = vec![0usize; nb + 1];
+        let mut rows: Vec<usize> = Vec::with_capacity(blocks.len());
+        for c in 0..nb {
+            let bucket = &mut by_column[start[c]..start[c + 1]];
+            bucket.sort_unstable();
+            let mut offset = 0;
+            let mut diagonal = false;
+            let mut last = usize::MAX;
+            for &(r, k) in bucket.iter() {
+                if r != last {
+                    if last != usize::MAX {
+                        if last == c {
+                            diagonal = true;
+                        } else {
+                            offset += sizes[order[last]];
+                        }
+                    }
+                    rows.push(r);
+                    last = r;
+                }
+                above[k] = offset;
+                diagonal_before[k] = diagonal;
+            }
+            rows_start[c + 1] = rows.len();
+        }
+        // Rows of the diagonal block in coordinate column b of a block of size s.
+        let diagonal_rows = |s: usize, b: usize| match side {
+            Side::Upper => b + 1,
+            Side::Lower => s - b,
+        };
+        // The coordinate-level pattern, column by column.
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        col_ptr.push(0usize);
+        let mut row_idx = Vec::new();
+        for c in 0..nb {
+            let s = sizes[order[c]];
+            for b in 0..s {
+                for &r in &rows[rows_start[c]..rows_start[c + 1]] {
+                    if r == c {
+                        let from = match side {
+                            Side::Upper => 0,
+                            Side::Lower => b,
+                        };
+                        row_idx.extend((from..from + diagonal_rows(s, b)).map(|a| first[c] + a));
+                    } else {
+                        row_idx.extend(first[r]..first[r + 1]);
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        // Each entry's slot, in the entries' order.
+        let mut slots = Vec::new();
+        for (k, &(u, v)) in blocks.iter().enumerate() {
+            let (r, c) = stored(&(u, v));
+            let diagonal_block = u == v;
+            for a in 0..sizes[u] {
+                for b in 0..sizes[v] {
+                    if diagonal_block && b < a {
+                        continue;
+                    }
+                    // (a of u, b of v) as (row, col) within the stored blocks (r, c).
+                    let (i, j) = match (diagonal_block, side) {
+                        (true, Side::Upper) => (a, b),
+                        (true, Side::Lower) => (b, a),
+                        _ if position[u] == r => (a, b),
+                        _ => (b, a),
+                    };
+                    let mut at = col_ptr[first[c] + j] + above[k];
+                    if diagonal_before[k] {
+                        at += diagonal_rows(sizes[order[c]], j);
+                    }
+                    at += if r == c {
+                        match side {
+                            Side::Upper => i,
+                            Side::Lower => i - j,
+                        }
+                    } else {
+                        i
+                    };
+                    slots.push(at);
+                }
+            }
+        }
+        let nnz = row_idx.len();
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
+        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
+        Assembly { matrix, slots }
+    }
+
     /// The compressed-column pattern of `entries` (duplicates merged, rows sorted) by a
     /// counting sort on the columns, O(nnz + dim), and each entry's slot in it. Hand-written:
     /// faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve 3-5% faster on
@@ -720,6 +867,59 @@ mod tests {
     use super::*;
     use faer::c64;
     use faer::sparse::Triplet;
+
+    /// `Assembly::blocked` against `Assembly::permuted` given the expanded entries and order:
+    /// the same pattern and the same slot for every entry, on random block patterns (sizes 0 to
+    /// 6, repeated pairs, every diagonal or not) in random orders, both triangles.
+    #[test]
+    fn blocked_matches_the_entrywise_assembly() {
+        let mut rng = crate::linalg::rng::Rng::new(17);
+        let mut below = |n: usize| (rng.next_u64() % n as u64) as usize;
+        for trial in 0..200 {
+            let nb = 1 + below(12);
+            let sizes: Vec<usize> = (0..nb).map(|_| below(7)).collect();
+            let mut blocks = Vec::new();
+            for u in 0..nb {
+                if trial % 2 == 0 || below(2) == 0 {
+                    blocks.push((u, u));
+                }
+            }
+            for _ in 0..below(3 * nb) {
+                let (u, v) = (below(nb), below(nb));
+                blocks.push((u.min(v), u.max(v)));
+            }
+            let mut order: Vec<usize> = (0..nb).collect();
+            for k in (1..nb).rev() {
+                order.swap(k, below(k + 1));
+            }
+            let mut offset = vec![0usize; nb + 1];
+            for u in 0..nb {
+                offset[u + 1] = offset[u] + sizes[u];
+            }
+            let mut entries = Vec::new();
+            for &(u, v) in &blocks {
+                for a in 0..sizes[u] {
+                    for b in 0..sizes[v] {
+                        if u != v || a <= b {
+                            entries.push((offset[u] + a, offset[v] + b));
+                        }
+                    }
+                }
+            }
+            let expanded: Vec<usize> = order
+                .iter()
+                .flat_map(|&u| offset[u]..offset[u + 1])
+                .collect();
+            for side in [Side::Upper, Side::Lower] {
+                let by_entry = Assembly::<f64>::permuted(offset[nb], &entries, &expanded, side);
+                let by_block = Assembly::<f64>::blocked(&sizes, &blocks, &order, side);
+                let (p, q) = (by_entry.matrix.symbolic(), by_block.matrix.symbolic());
+                assert_eq!(p.col_ptr(), q.col_ptr(), "trial {trial} {side:?}");
+                assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} {side:?}");
+                assert_eq!(by_entry.slots, by_block.slots, "trial {trial} {side:?}");
+            }
+        }
+    }
 
     /// The tridiagonal Hermitian matrix with diagonal `d` and off-diagonal `e` (i on the
     /// superdiagonal), factored by LDLᴴ in both layouts; returns the backward-error bounds and

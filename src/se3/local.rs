@@ -148,7 +148,8 @@ impl System {
             offset[u + 1] = offset[u] + dims[u];
         }
         let dim = offset[n];
-        let mut pattern = Vec::new();
+        // The entries, pair by pair: the coordinates of u by those of v (a ≤ b when u = v).
+        let mut count = 0;
         let mut diagonal = vec![usize::MAX; dim];
         for &(u, v) in &problem.pairs {
             for a in 0..dims[u] {
@@ -156,26 +157,23 @@ impl System {
                     if u == v && b < a {
                         continue;
                     }
-                    let (r, c) = (offset[u] + a, offset[v] + b);
-                    if r == c {
-                        diagonal[r] = pattern.len();
+                    if u == v && a == b {
+                        diagonal[offset[u] + a] = count;
                     }
-                    pattern.push((r.min(c), r.max(c)));
+                    count += 1;
                 }
             }
         }
-        let count = pattern.len();
-        let mut group = vec![0; dim];
-        for u in 0..n {
-            for k in offset[u]..offset[u + 1] {
-                group[k] = u;
-            }
-        }
-        let order = group_ordering(&problem.pose_rank, &group);
+        // Poses in the fill-reducing order, each pose's coordinates together.
+        let poses = group_ordering(&problem.pose_rank, &(0..n).collect::<Vec<_>>());
+        let order: Vec<usize> = poses
+            .iter()
+            .flat_map(|&u| offset[u]..offset[u + 1])
+            .collect();
         // As the planar Newton system: supernodal, assembled directly in its elimination order
         // and triangle (faer then factors it without a permuted copy).
         let layout = Layout::Supernodal;
-        let assembly = Assembly::permuted(dim, &pattern, &order, layout.stored_side());
+        let assembly = Assembly::blocked(&dims, &problem.pairs, &poses, layout.stored_side());
         let factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
             layout.stored_side(),

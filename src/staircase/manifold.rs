@@ -4,7 +4,7 @@
 //! Riemannian Hessian 2Bᵀ W̃(λ) B in that basis (Sec. 4.1, real form of eq. (16)), the
 //! retraction, and the sparse Newton system built from them.
 
-use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor, group_ordering};
+use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor};
 use crate::problem::rank_p::{Point, Problem, dot};
 use faer::c64;
 
@@ -235,17 +235,21 @@ pub struct NewtonSystem {
 
 impl NewtonSystem {
     pub fn new(problem: &Problem, basis: &TangentBasis) -> Self {
-        let pattern = basis.hessian_pattern(problem);
-        // Coordinates grouped by pose, poses in the problem's fill-reducing order.
-        let poses = problem.row_poses();
-        let group: Vec<usize> = (0..poses.len())
-            .flat_map(|k| std::iter::repeat_n(poses[k], basis.len(k)))
+        // The entries of [`TangentBasis::hessian_pattern`] come in blocks, one per entry of W̃'s
+        // upper triangle: the coordinates of its row by those of its column. Rows in the
+        // problem's fill-reducing order, each row's coordinates together.
+        let rows = basis.offsets.len() - 1;
+        let sizes: Vec<usize> = (0..rows).map(|k| basis.len(k)).collect();
+        let blocks: Vec<(usize, usize)> = problem.upper.iter().map(|&(k, l, _)| (k, l)).collect();
+        let row_order = problem.row_order();
+        let order: Vec<usize> = row_order
+            .iter()
+            .flat_map(|&k| basis.offsets[k]..basis.offsets[k + 1])
             .collect();
-        let order = group_ordering(&problem.pose_rank, &group);
         // Supernodal: measured 1.6x (M3500c) to 2x (city10000) faster whole-process than faer's
         // own choice (simplicial) on these patterns. Assembled directly in its order and triangle.
         let layout = Layout::Supernodal;
-        let assembly = Assembly::permuted(basis.dim, &pattern, &order, layout.stored_side());
+        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, layout.stored_side());
         let factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
             layout.stored_side(),
@@ -253,7 +257,7 @@ impl NewtonSystem {
         );
         NewtonSystem {
             assembly,
-            values: Vec::with_capacity(pattern.len()),
+            values: Vec::new(),
             factor,
             permuted: vec![0.0; order.len()],
             order,
