@@ -18,10 +18,6 @@ use pgo::problem::weights::{Weights, edge_weights};
 use pgo::staircase::{StaircaseOptions, solve_anchored};
 use std::time::Instant;
 
-/// The tools' allocator, so that the floor and pgo-solve get memory the same way.
-#[global_allocator]
-static ALLOCATOR: pgo::cli::allocator::Allocator = pgo::cli::allocator::Allocator;
-
 /// The median wall time of 9 runs of `f`.
 fn median(f: &mut dyn FnMut()) -> f64 {
     let mut times: Vec<f64> = (0..9)
@@ -36,7 +32,6 @@ fn median(f: &mut dyn FnMut()) -> f64 {
 }
 
 fn main() {
-    pgo::cli::allocator::configure();
     for path in std::env::args().skip(1) {
         let options = ReadOptions::default();
         let mut graph = match io::read_path(&path, &options) {

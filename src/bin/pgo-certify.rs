@@ -1,6 +1,3 @@
-#[global_allocator]
-static ALLOCATOR: pgo::cli::allocator::Allocator = pgo::cli::allocator::Allocator;
-
 fn main() -> std::process::ExitCode {
     pgo::cli::certify::main()
 }

@@ -4,7 +4,6 @@
 //! SIGINT, SIGTERM and SIGHUP remove the temporary output files and end the tool by the signal
 //! (the shell reports 130, 143, 129): [`signals`].
 
-pub mod allocator;
 pub mod certify;
 pub mod common;
 pub mod convert;
@@ -51,7 +50,6 @@ pub fn after_help(examples: &str) -> String {
 /// `PATH:LINE:COL`) and maps it to exit status 2; a closed pipe is status 141, silently.
 /// Interrupts are handled from here on ([`signals::install`]).
 pub fn run_tool(name: &str, body: impl FnOnce() -> crate::Result<ExitCode>) -> ExitCode {
-    allocator::configure();
     signals::install();
     match body() {
         Ok(code) => code,
