@@ -752,13 +752,9 @@ impl<T: Scalar> Assembly<T> {
                     if diagonal_before[k] {
                         at += diagonal_rows(sizes[order[c]], j);
                     }
-                    at += if r == c {
-                        match side {
-                            Side::Upper => i,
-                            Side::Lower => i - j,
-                        }
-                    } else {
-                        i
+                    at += match (diagonal_block, side) {
+                        (true, Side::Lower) => i - j,
+                        _ => i,
                     };
                     slots.push(at);
                 }
@@ -854,6 +850,16 @@ pub fn pose_rank(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Vec<u
     rank
 }
 
+/// The coordinate order of a block order (`order[new] = old` block): each block's coordinates
+/// `offset[u]..offset[u + 1]` together, in their order, blocks in `order`. The order an
+/// [`Assembly::blocked`] is assembled in, for permuting vectors into it.
+pub fn block_coordinates(order: &[usize], offset: &[usize]) -> Vec<usize> {
+    order
+        .iter()
+        .flat_map(|&u| offset[u]..offset[u + 1])
+        .collect()
+}
+
 /// An order of rows (`order[new] = old`) that keeps each pose's rows together, poses by `rank`;
 /// `group[row]` is the pose of each row.
 pub fn group_ordering(rank: &[usize], group: &[usize]) -> Vec<usize> {
@@ -906,10 +912,7 @@ mod tests {
                     }
                 }
             }
-            let expanded: Vec<usize> = order
-                .iter()
-                .flat_map(|&u| offset[u]..offset[u + 1])
-                .collect();
+            let expanded = block_coordinates(&order, &offset);
             for side in [Side::Upper, Side::Lower] {
                 let by_entry = Assembly::<f64>::permuted(offset[nb], &entries, &expanded, side);
                 let by_block = Assembly::<f64>::blocked(&sizes, &blocks, &order, side);

@@ -12,7 +12,7 @@
 
 use super::problem::{Point3, Problem3};
 use super::stiefel::{polar_rows, tangent_basis};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor, block_coordinates, group_ordering};
 
 /// One step, for progress reports.
 #[derive(Debug, Clone, Copy)]
@@ -166,10 +166,7 @@ impl System {
         }
         // Poses in the fill-reducing order, each pose's coordinates together.
         let poses = group_ordering(&problem.pose_rank, &(0..n).collect::<Vec<_>>());
-        let order: Vec<usize> = poses
-            .iter()
-            .flat_map(|&u| offset[u]..offset[u + 1])
-            .collect();
+        let order = block_coordinates(&poses, &offset);
         // As the planar Newton system: supernodal, assembled directly in its elimination order
         // and triangle (faer then factors it without a permuted copy).
         let layout = Layout::Supernodal;
