@@ -153,6 +153,23 @@ fn intel_with_100_random_outliers() {
     for (a, b) in r.solution.estimate.iter().zip(&reference.estimate) {
         assert!((a.x - b.x).abs() < 1e-6 && (a.y - b.y).abs() < 1e-6);
     }
+    // The inner problems' certificates (off by default) decide nothing GNC does: with them the
+    // same iterations, inliers and estimate, and every inner problem checked; the late ones,
+    // with the outliers' weights at 0, are the clean problem's and certify.
+    assert!(r.iterations.iter().all(|i| i.certified.is_none()));
+    let checked = RobustOptions {
+        certify_inner: true,
+        ..Default::default()
+    };
+    let c = robust_solve(&corrupted, &checked).unwrap();
+    assert_eq!(c.rejected, r.rejected);
+    assert_eq!(c.iterations.len(), r.iterations.len());
+    for (a, b) in c.iterations.iter().zip(&r.iterations) {
+        assert_eq!(a.weighted_cost, b.weighted_cost);
+        assert!(a.certified.is_some());
+    }
+    assert_eq!(c.iterations.last().unwrap().certified, Some(true));
+    assert_eq!(c.solution.estimate, r.solution.estimate);
 }
 
 /// The tools end to end, for both losses: outliers planted by `pgo-simulate --corrupt` (local

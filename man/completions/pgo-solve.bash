@@ -23,7 +23,7 @@ _pgo__solve() {
 
     case "${cmd}" in
         pgo__solve)
-            opts="-o -q -h -V --from --dialect --strict --ignore-equiv --allow-indefinite --output --to --weights --method --solver --tol --max-rank --staircase-budget --refine --robust --inlier-threshold --all-edges-uncertain --warm-start --drop-outliers --marginals --fail-uncertified --json --no-timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
+            opts="-o -q -h -V --from --dialect --strict --ignore-equiv --allow-indefinite --output --to --weights --method --solver --tol --max-rank --staircase-budget --refine --robust --inlier-threshold --all-edges-uncertain --warm-start --certify-inner --drop-outliers --marginals --fail-uncertified --json --no-timings --quiet --progress --rerun-save --rerun-connect --rerun-spawn --help --version"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0

@@ -78,6 +78,10 @@ pub struct SolveOptions {
     /// The Newton steps the staircase's first descent may always take, past the budget
     /// ([`StaircaseOptions::min_descent_steps`], default [`crate::staircase::MIN_DESCENT_STEPS`]).
     pub min_descent_steps: usize,
+    /// Whether the staircase proves its estimate ([`StaircaseOptions::certify`], default true).
+    /// Off, a component the staircase solves gets Riemannian Newton's rank-1 estimate with no
+    /// bound (lower bound 0, not certified) and no second method under auto.
+    pub certify: bool,
 }
 
 impl Default for SolveOptions {
@@ -91,6 +95,7 @@ impl Default for SolveOptions {
             max_rank: StaircaseOptions::default().max_rank,
             staircase_budget: StaircaseOptions::default().staircase_budget,
             min_descent_steps: StaircaseOptions::default().min_descent_steps,
+            certify: true,
         }
     }
 }
@@ -285,6 +290,7 @@ fn solve_with(
         max_rank: options.max_rank,
         staircase_budget: options.staircase_budget,
         min_descent_steps: options.min_descent_steps,
+        certify: options.certify,
         ..Default::default()
     };
     for (part, members, _) in graph.components() {
@@ -317,12 +323,17 @@ fn solve_with(
         } else {
             scalable = Some(run_staircase()?);
         }
-        let first = match (&algorithm1, &scalable) {
+        let mut first = match (&algorithm1, &scalable) {
             (Some(a), _) => sdp_report(&part, a, options.tolerance),
             (_, Some((s, _))) => staircase_report(&part, s, options.tolerance),
             _ => unreachable!("one method ran"),
         };
-        let (mut report, mut poses) = if first.certified {
+        // A staircase estimate left unchecked (`certify` off) is the answer too.
+        let unchecked = !options.certify && scalable.is_some();
+        if unchecked {
+            first.not_certified_because = Some("not checked (certify off)".to_string());
+        }
+        let (mut report, mut poses) = if first.certified || unchecked {
             let poses = match (algorithm1, scalable) {
                 (Some(a), _) => a.poses,
                 (_, Some((_, p))) => p,

@@ -74,6 +74,10 @@ pub struct StaircaseOptions {
     /// [`MIN_DESCENT_STEPS`]), so that a clean graph too large for the budget (10⁶ poses) still
     /// reaches its minimum.
     pub min_descent_steps: usize,
+    /// Whether the estimate is proven (default true). Off, [`solve_from`] returns the first
+    /// descent's rank-1 estimate with no bound, no certificate attempted and no staircase: for
+    /// GNC's inner problems ([`crate::robust`]), of which GNC uses only the estimates.
+    pub certify: bool,
 }
 
 impl Default for StaircaseOptions {
@@ -84,6 +88,7 @@ impl Default for StaircaseOptions {
             max_rank: 6,
             staircase_budget: STAIRCASE_BUDGET,
             min_descent_steps: MIN_DESCENT_STEPS,
+            certify: true,
         }
     }
 }
@@ -742,7 +747,6 @@ pub fn solve_from(
     observer: &mut dyn FnMut(&Iteration),
 ) -> StaircaseSolution {
     let n = problem.n;
-    let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
     // Variable projection at rank 1 (None only if L is not numerically positive definite). The
     // ranks above keep the joint steps: projecting their escape points made the paper's toy graph
     // (Appendix 8.8) stop at a saddle of rank 5 and end at rank 6 with a relaxation λ 6.5e-8 less
@@ -767,6 +771,25 @@ pub fn solve_from(
         system.factor.release();
     }
     let mut iterations = local.iterations;
+    if !options.certify {
+        return StaircaseSolution {
+            point: local.point,
+            cost: local.cost,
+            lambda: local.lambda,
+            bound: None,
+            lower_bound: 0.0,
+            certified: false,
+            rank: 1,
+            iterations,
+            gradient_norm: local.gradient_norm,
+            factorizations: 0,
+            near_zero: None,
+            staircase_work: local.iterations as f64 * local.step_work,
+            limit_reached: local.limited,
+        };
+    }
+    // The certificate's analysis, after Newton: its pattern is not alive while Newton's factor is.
+    let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
     // The work so far in multiply-adds (the staircase's budget): Newton's factorizations, one
     // rank-1 step each, and the certificate's below.
     let rank_1_step = local.step_work;
