@@ -38,7 +38,19 @@ pub struct Local3 {
 
 /// QX by Q's blocks (no rounding bounds; for the solver's own use).
 pub fn apply_q(problem: &Problem3, x: &Point3) -> Vec<f64> {
-    let p = x.p;
+    // Compiled for the ranks the staircase meets most, as [`hessian`]'s blocks.
+    match x.p {
+        3 => apply_q_at::<3>(problem, x),
+        4 => apply_q_at::<4>(problem, x),
+        5 => apply_q_at::<5>(problem, x),
+        _ => apply_q_at::<0>(problem, x),
+    }
+}
+
+/// [`apply_q`] with p = `P` known at compile time (0: read from x).
+#[inline(always)]
+fn apply_q_at<const P: usize>(problem: &Problem3, x: &Point3) -> Vec<f64> {
+    let p = if P > 0 { P } else { x.p };
     let mut out = vec![0.0; problem.dim() * p];
     for (k, &(u, v)) in problem.pairs.iter().enumerate() {
         let b = &problem.blocks[k];
@@ -230,6 +242,73 @@ fn lambda_blocks(problem: &Problem3, x: &Point3, qx: &[f64]) -> Vec<[[f64; 3]; 3
     problem.multipliers(x, qx)
 }
 
+/// One pose pair's block of the Hessian 2 B_uᵀ (S_uv ⊗ I_p) B_v.
+struct PairBlock<'a> {
+    s: &'a [[f64; 4]; 4],
+    bu: &'a [f64],
+    bv: &'a [f64],
+    du: usize,
+    dv: usize,
+    /// u = v: the upper triangle only.
+    diagonal: bool,
+}
+
+impl PairBlock<'_> {
+    /// Appends the block's values (row by row, a ≤ b on the diagonal) to `values`; `P` is p
+    /// where it is known at compile time, else 0 (then `p` is read).
+    ///
+    /// Each entry is the sum Σ_i B_u[i, a] K[i, b] taken in the order of i, K = (S_uv ⊗ I_p) B_v
+    /// with each of its entries summed in the order of S's columns (zeros of S skipped): the
+    /// entries of one row of the block are accumulated side by side (K stored row-major for it),
+    /// which lets them share vector registers without reordering any sum.
+    #[inline(always)]
+    fn values<const P: usize>(&self, p: usize, k: &mut Vec<f64>, values: &mut Vec<f64>) {
+        let p = if P > 0 { P } else { p };
+        let (w, dv) = (4 * p, self.dv);
+        debug_assert!(P == 0 || (self.du == 4 * P - 6 && dv == 4 * P - 6));
+        let dv = if P > 0 { 4 * P - 6 } else { dv };
+        let du = if P > 0 { 4 * P - 6 } else { self.du };
+        // K (4p × dv, row-major), row (la, c) = Σ_lb S[la][lb] B_v[(lb, c)].
+        k.clear();
+        k.resize(w * dv, 0.0);
+        for la in 0..4 {
+            for lb in 0..4 {
+                let q = self.s[la][lb];
+                if q != 0.0 {
+                    for c in 0..p {
+                        let row = &mut k[(la * p + c) * dv..(la * p + c + 1) * dv];
+                        for (b, out) in row.iter_mut().enumerate() {
+                            *out += q * self.bv[b * w + lb * p + c];
+                        }
+                    }
+                }
+            }
+        }
+        // The empty sum (f64's `Sum` starts from it), so that each entry is the iterator sum.
+        let start: f64 = std::iter::empty::<f64>().sum();
+        // One row of the block: on the stack up to rank 6 (18 coordinates).
+        let mut stack = [0.0; 4 * 6 - 6];
+        let mut heap = Vec::new();
+        let row = if dv <= stack.len() {
+            &mut stack[..dv]
+        } else {
+            heap.resize(dv, 0.0);
+            &mut heap[..]
+        };
+        for a in 0..du {
+            let ua = &self.bu[a * w..(a + 1) * w];
+            row.fill(start);
+            for (i, &x) in ua.iter().enumerate() {
+                for (acc, &y) in row.iter_mut().zip(&k[i * dv..(i + 1) * dv]) {
+                    *acc += x * y;
+                }
+            }
+            let from = if self.diagonal { a } else { 0 };
+            values.extend(row[from..].iter().map(|v| 2.0 * v));
+        }
+    }
+}
+
 /// Hessian values (pattern order) and gradient coordinates at x.
 fn hessian(
     problem: &Problem3,
@@ -256,36 +335,34 @@ fn hessian(
                 }
             }
         }
-        let (bu, bv) = (&bases[u], &bases[v]);
-        // (S_uv ⊗ I_p) B_v (4p × dv), row (la, c) = Σ_lb S[la][lb] B_v[(lb, c)].
-        kb.clear();
-        kb.resize(4 * p * dv, 0.0);
-        for b in 0..dv {
-            let col = &bv[b * 4 * p..(b + 1) * 4 * p];
-            let out = &mut kb[b * 4 * p..(b + 1) * 4 * p];
-            for la in 0..4 {
-                for lb in 0..4 {
-                    let q = s[la][lb];
-                    if q != 0.0 {
-                        for c in 0..p {
-                            out[la * p + c] += q * col[lb * p + c];
-                        }
-                    }
-                }
-            }
-        }
-        for a in 0..du {
-            let ua = &bu[a * 4 * p..(a + 1) * 4 * p];
-            for b in 0..dv {
-                if u == v && b < a {
-                    continue;
-                }
-                let kbb = &kb[b * 4 * p..(b + 1) * 4 * p];
-                values.push(2.0 * ua.iter().zip(kbb).map(|(a, c)| a * c).sum::<f64>());
-            }
+        let block = PairBlock {
+            s: &s,
+            bu: &bases[u],
+            bv: &bases[v],
+            du,
+            dv,
+            diagonal: u == v,
+        };
+        // Compiled for the ranks the staircase meets most (sizes known, loops unrolled), the
+        // same operations in the same order at every rank.
+        match p {
+            3 => block.values::<3>(p, &mut kb, &mut values),
+            4 => block.values::<4>(p, &mut kb, &mut values),
+            5 => block.values::<5>(p, &mut kb, &mut values),
+            _ => block.values::<0>(p, &mut kb, &mut values),
         }
     }
-    // Gradient: Bᵀ 2QX (the normal part ΛX is orthogonal to B).
+    (values, gradient(problem, sys, p, qx, bases))
+}
+
+/// The gradient's coordinates Bᵀ 2QX (the normal part ΛX is orthogonal to B).
+fn gradient(
+    problem: &Problem3,
+    sys: &System,
+    p: usize,
+    qx: &[f64],
+    bases: &[Vec<f64>],
+) -> Vec<f64> {
     let mut grad = vec![0.0; sys.dim()];
     let mut local = vec![0.0; 4 * p];
     for u in 0..problem.n {
@@ -301,7 +378,7 @@ fn hessian(
             grad[sys.offset[u] + a] = 2.0 * col.iter().zip(&local).map(|(x, y)| x * y).sum::<f64>();
         }
     }
-    (values, grad)
+    grad
 }
 
 /// The decrease −(gᵀδ + ½ δᵀHδ) that the quadratic model at a point predicts along δ, H applied
@@ -509,7 +586,7 @@ pub fn optimize(
                 bases = (0..problem.n)
                     .map(|u| pose_basis(problem, &x, u, p))
                     .collect();
-                let (_, g) = hessian(problem, &sys, &x, &qx, &bases);
+                let g = gradient(problem, &sys, p, &qx, &bases);
                 gradient_norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
                 converged = true;
                 break;
@@ -529,5 +606,105 @@ pub fn optimize(
         iterations,
         converged,
         work,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::rng::Rng;
+    use crate::se3::problem::weights3;
+    use crate::simulate::space::{SpaceConfig, World3, simulate3};
+    use crate::simulate::{RotationNoise, TranslationNoise};
+
+    /// The Hessian's values as the formula 2 B_uᵀ (S_uv ⊗ I_p) B_v reads, entry by entry: each
+    /// entry of K = (S_uv ⊗ I_p) B_v summed over S's columns in order, then each value the sum
+    /// over i of B_u[i, a] K[i, b] in order (f64's iterator sum).
+    fn values_by_formula(problem: &Problem3, sys: &System, x: &Point3, qx: &[f64]) -> Vec<f64> {
+        let p = x.p;
+        let w = 4 * p;
+        let lambda = lambda_blocks(problem, x, qx);
+        let bases: Vec<Vec<f64>> = (0..problem.n)
+            .map(|u| pose_basis(problem, x, u, p))
+            .collect();
+        let mut values = Vec::new();
+        for (k, &(u, v)) in problem.pairs.iter().enumerate() {
+            let (du, dv) = (sys.dims[u], sys.dims[v]);
+            if du == 0 || dv == 0 {
+                continue;
+            }
+            let mut s = problem.blocks[k];
+            if u == v {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        s[1 + a][1 + b] -= lambda[u][a][b];
+                    }
+                }
+            }
+            for a in 0..du {
+                for b in 0..dv {
+                    if u == v && b < a {
+                        continue;
+                    }
+                    let mut kb = vec![0.0; w];
+                    for la in 0..4 {
+                        for lb in 0..4 {
+                            if s[la][lb] != 0.0 {
+                                for c in 0..p {
+                                    kb[la * p + c] += s[la][lb] * bases[v][b * w + lb * p + c];
+                                }
+                            }
+                        }
+                    }
+                    let ua = &bases[u][a * w..(a + 1) * w];
+                    values.push(2.0 * ua.iter().zip(&kb).map(|(a, c)| a * c).sum::<f64>());
+                }
+            }
+        }
+        values
+    }
+
+    /// `hessian` (blocks compiled per rank, a block's row accumulated side by side) gives the
+    /// formula's values bit for bit at every rank, the compiled ones (3, 4, 5) and the general
+    /// code (6, and 7 and 9 with rows longer than the stack's room), at random points of
+    /// St(3, p)^n × ℝ^{p(n−1)}.
+    #[test]
+    fn hessian_values_are_the_formula_bit_for_bit() {
+        let graph = simulate3(&SpaceConfig {
+            world: World3::Grid,
+            n: 27,
+            side: 6.0,
+            loop_probability: 0.3,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
+            seed: 3,
+        })
+        .graph;
+        let weights = weights3(&graph, false).unwrap();
+        let problem = Problem3::new(&graph, &weights, 0);
+        let mut rng = Rng::new(11);
+        for p in [3, 4, 5, 6, 7, 9] {
+            let mut x = Point3 {
+                p,
+                x: (0..problem.dim() * p).map(|_| rng.normal()).collect(),
+            };
+            for u in 0..problem.n {
+                let r0 = problem.rotation_row(u, 0);
+                assert!(polar_rows(&mut x.x[r0 * p..(r0 + 3) * p], p));
+            }
+            let sys = System::new(&problem, p);
+            let qx = apply_q(&problem, &x);
+            let bases: Vec<Vec<f64>> = (0..problem.n)
+                .map(|u| pose_basis(&problem, &x, u, p))
+                .collect();
+            let (values, _) = hessian(&problem, &sys, &x, &qx, &bases);
+            let expected = values_by_formula(&problem, &sys, &x, &qx);
+            assert_eq!(values.len(), sys.count, "rank {p}");
+            let same = values
+                .iter()
+                .zip(&expected)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "rank {p}");
+        }
     }
 }
