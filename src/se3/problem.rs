@@ -194,19 +194,23 @@ impl Problem3 {
             .collect();
         others.sort_unstable();
         others.dedup();
-        pairs.extend(others);
-        let index: std::collections::HashMap<(usize, usize), usize> =
-            pairs.iter().enumerate().map(|(k, &p)| (p, k)).collect();
-        let mut blocks = vec![[[0.0; 4]; 4]; pairs.len()];
-        let mut abs_blocks = vec![[[0.0; 4]; 4]; pairs.len()];
+        // Pair (u, u) at u; (u, v), u < v, at n + its rank among the sorted others.
+        let index = |a: usize, b: usize| match a.cmp(&b) {
+            std::cmp::Ordering::Equal => a,
+            _ => {
+                n + others
+                    .binary_search(&(a.min(b), a.max(b)))
+                    .expect("an edge's pair")
+            }
+        };
+        let mut blocks = vec![[[0.0; 4]; 4]; n + others.len()];
+        let mut abs_blocks = vec![[[0.0; 4]; 4]; n + others.len()];
         let mut degree = vec![0usize; n];
-        // Adds v at (node a, local row la) × (node b, local row lb), both orientations.
-        let mut add = |a: usize, la: usize, b: usize, lb: usize, v: f64| {
-            let (k, ra, rb) = if a <= b {
-                (index[&(a, b)], la, lb)
-            } else {
-                (index[&(b, a)], lb, la)
-            };
+        // Adds v at (node a, local row la) × (node b, local row lb), both orientations, `ij` the
+        // index of the term's pair (i, j).
+        let mut add = |ij: usize, a: usize, la: usize, b: usize, lb: usize, v: f64| {
+            let k = if a == b { a } else { ij };
+            let (ra, rb) = if a <= b { (la, lb) } else { (lb, la) };
             blocks[k][ra][rb] += v;
             abs_blocks[k][ra][rb] += v.abs();
             if a == b && ra != rb {
@@ -218,32 +222,36 @@ impl Problem3 {
             degree[t.i] += 1;
             degree[t.j] += 1;
             let (i, j, tau, kappa) = (t.i, t.j, t.tau, t.kappa);
+            let ij = index(i, j);
             // τ c cᵀ with c = e_{t_j} − e_{t_i} − Σ_a t̃_a e_{y_ia}.
-            let mut c: Vec<(usize, usize, f64)> = vec![(j, 0, 1.0), (i, 0, -1.0)];
-            for a in 0..3 {
-                c.push((i, 1 + a, -t.t[a]));
-            }
+            let c = [
+                (j, 0, 1.0),
+                (i, 0, -1.0),
+                (i, 1, -t.t[0]),
+                (i, 2, -t.t[1]),
+                (i, 3, -t.t[2]),
+            ];
             for x in 0..c.len() {
                 for y in 0..c.len() {
                     let (na, la, va) = c[x];
                     let (nb, lb, vb) = c[y];
                     // Each unordered pair once: the closure adds both orientations.
                     if (na, la) < (nb, lb) || (na == nb && la == lb) {
-                        add(na, la, nb, lb, tau * va * vb);
+                        add(ij, na, la, nb, lb, tau * va * vb);
                     }
                 }
             }
             // κ Σ_b (e_{y_jb} − Σ_a R̃_ab e_{y_ia})(…)ᵀ.
             for b in 0..3 {
-                add(j, 1 + b, j, 1 + b, kappa);
+                add(ij, j, 1 + b, j, 1 + b, kappa);
                 for a in 0..3 {
-                    add(i, 1 + a, j, 1 + b, -kappa * t.r[a][b]);
+                    add(ij, i, 1 + a, j, 1 + b, -kappa * t.r[a][b]);
                 }
             }
             for a in 0..3 {
                 for a2 in a..3 {
                     let rr: f64 = (0..3).map(|b| t.r[a][b] * t.r[a2][b]).sum();
-                    add(i, 1 + a, i, 1 + a2, kappa * rr);
+                    add(ij, i, 1 + a, i, 1 + a2, kappa * rr);
                 }
             }
         }
@@ -260,6 +268,7 @@ impl Problem3 {
                 }
             }
         }
+        pairs.extend(others);
         let pose_rank = crate::linalg::factor::pose_rank(n, terms.iter().map(|t| (t.i, t.j)));
         Problem3 {
             n,
