@@ -90,10 +90,15 @@ impl Certifier3 {
             }
         }
         let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
-        let assembly = Assembly::<f64>::new(dim, &pattern);
         let order = group_ordering(&problem.pose_rank, &problem.row_pose());
-        let factor =
-            SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order, Layout::Auto);
+        // Assembled in its elimination order, so that no factorization copies it into that order.
+        let layout = Layout::Auto;
+        let assembly = Assembly::<f64>::permuted(dim, &pattern, &order, layout.stored_side());
+        let factor = SparseFactor::analyze_in_order(
+            assembly.matrix.symbolic(),
+            layout.stored_side(),
+            layout,
+        );
         Certifier3 {
             entries,
             lambda_at,
