@@ -242,6 +242,20 @@ fn lambda_blocks(problem: &Problem3, x: &Point3, qx: &[f64]) -> Vec<[[f64; 3]; 3
     problem.multipliers(x, qx)
 }
 
+/// S's block of pose pair k (u, v): Q's, less Λ_u in the rotation rows where u = v.
+fn s_block(problem: &Problem3, lambda: &[[[f64; 3]; 3]], k: usize) -> [[f64; 4]; 4] {
+    let (u, v) = problem.pairs[k];
+    let mut s = problem.blocks[k];
+    if u == v {
+        for a in 0..3 {
+            for b in 0..3 {
+                s[1 + a][1 + b] -= lambda[u][a][b];
+            }
+        }
+    }
+    s
+}
+
 /// One pose pair's block of the Hessian 2 B_uᵀ (S_uv ⊗ I_p) B_v.
 struct PairBlock<'a> {
     s: &'a [[f64; 4]; 4],
@@ -327,14 +341,7 @@ fn hessian(
             continue;
         }
         // S_uv (4x4) ⊗ I_p.
-        let mut s = problem.blocks[k];
-        if u == v {
-            for a in 0..3 {
-                for b in 0..3 {
-                    s[1 + a][1 + b] -= lambda[u][a][b];
-                }
-            }
-        }
+        let s = s_block(problem, &lambda, k);
         let block = PairBlock {
             s: &s,
             bu: &bases[u],
@@ -633,14 +640,7 @@ mod tests {
             if du == 0 || dv == 0 {
                 continue;
             }
-            let mut s = problem.blocks[k];
-            if u == v {
-                for a in 0..3 {
-                    for b in 0..3 {
-                        s[1 + a][1 + b] -= lambda[u][a][b];
-                    }
-                }
-            }
+            let s = s_block(problem, &lambda, k);
             for a in 0..du {
                 for b in 0..dv {
                     if u == v && b < a {
