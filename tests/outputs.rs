@@ -118,16 +118,27 @@ fn interrupt_while_writing(
     poses: usize,
     signal: i32,
 ) -> Option<std::process::ExitStatus> {
+    use std::os::unix::process::CommandExt;
     let output = dir.join("big.g2o");
-    let mut child = Command::new(bin("pgo-simulate"))
+    let mut command = Command::new(bin("pgo-simulate"));
+    command
         .args(["-n", &poses.to_string(), "--loop-probability", "0", "-q"])
         .arg("-o")
         .arg(&output)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(Stdio::piped());
+    // The tool keeps a signal it inherits ignored (as `nohup` and `cmd &` in a script intend),
+    // and a test run from a background job inherits SIGINT ignored: started here as from an
+    // interactive shell, with the signal's default action.
+    // SAFETY: signal(2) only, between fork and exec.
+    unsafe {
+        command.pre_exec(move || {
+            libc::signal(signal, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().unwrap();
     loop {
         if let Some(status) = child.try_wait().unwrap() {
             assert!(status.success(), "pgo-simulate failed");
