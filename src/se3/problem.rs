@@ -255,6 +255,7 @@ impl Problem3 {
                 }
             }
         }
+        pairs.extend(others);
         // Anchor's translation row: absent.
         for (k, &(u, v)) in pairs.iter().enumerate() {
             for l in 0..4 {
@@ -268,7 +269,6 @@ impl Problem3 {
                 }
             }
         }
-        pairs.extend(others);
         let pose_rank = crate::linalg::factor::pose_rank(n, terms.iter().map(|t| (t.i, t.j)));
         Problem3 {
             n,
@@ -539,5 +539,49 @@ impl Problem3 {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulate::space::{SpaceConfig, World3, simulate3};
+    use crate::simulate::{RotationNoise, TranslationNoise};
+
+    /// The anchor has no translation row: every block of a pair with the anchor, off the
+    /// diagonal too, holds zeros there (in `abs_blocks` as well), whichever pose is anchored;
+    /// and each pair's block sits at its pair's index.
+    #[test]
+    fn the_anchors_translation_row_is_absent_from_every_block() {
+        let graph = simulate3(&SpaceConfig {
+            world: World3::Sphere,
+            n: 30,
+            side: 5.0,
+            loop_probability: 0.5,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
+            seed: 4,
+        })
+        .graph;
+        let weights = weights3(&graph, false).unwrap();
+        for anchor in [0, 7, 29] {
+            let problem = Problem3::new(&graph, &weights, anchor);
+            let mut off_diagonal = 0;
+            for (k, &(u, v)) in problem.pairs.iter().enumerate() {
+                assert!(u <= v && (k >= problem.n || (u, v) == (k, k)));
+                for l in 0..4 {
+                    if u == anchor {
+                        assert_eq!(problem.blocks[k][0][l], 0.0);
+                        assert_eq!(problem.abs_blocks[k][0][l], 0.0);
+                    }
+                    if v == anchor {
+                        assert_eq!(problem.blocks[k][l][0], 0.0);
+                        assert_eq!(problem.abs_blocks[k][l][0], 0.0);
+                    }
+                }
+                off_diagonal += usize::from(u != v && (u == anchor || v == anchor));
+            }
+            assert!(off_diagonal >= 1, "anchor {anchor}");
+        }
     }
 }
