@@ -772,21 +772,11 @@ pub fn solve_from(
     }
     let mut iterations = local.iterations;
     if !options.certify {
-        return StaircaseSolution {
-            point: local.point,
-            cost: local.cost,
-            lambda: local.lambda,
-            bound: None,
-            lower_bound: 0.0,
-            certified: false,
-            rank: 1,
-            iterations,
-            gradient_norm: local.gradient_norm,
-            factorizations: 0,
-            near_zero: None,
-            staircase_work: local.iterations as f64 * local.step_work,
-            limit_reached: local.limited,
-        };
+        let (work, limited) = (local.iterations as f64 * local.step_work, local.limited);
+        let mut solution = finish(local, None, None, 1, iterations, None, options);
+        solution.staircase_work = work;
+        solution.limit_reached = limited;
+        return solution;
     }
     // The certificate's analysis, after Newton: its pattern is not alive while Newton's factor is.
     let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
@@ -840,7 +830,7 @@ pub fn solve_from(
             None,
             1,
             iterations,
-            &mut certifier,
+            Some(&mut certifier),
             options,
         );
     }
@@ -910,7 +900,7 @@ pub fn solve_from(
                 None,
                 rank,
                 iterations,
-                &mut certifier,
+                Some(&mut certifier),
                 options,
             );
             solution.staircase_work = work(newton_work, &certifier);
@@ -951,7 +941,7 @@ pub fn solve_from(
         Some(relaxed_lambda.as_deref().unwrap_or(&own_lambda)),
         rank,
         iterations,
-        &mut certifier,
+        Some(&mut certifier),
         options,
     );
     solution.limit_reached = limit_reached;
@@ -960,18 +950,21 @@ pub fn solve_from(
 }
 
 /// The solution, with the near-zero eigenvalue count: the deflated proof's (one, proven) or the
-/// inertia of W̃(λ) at `count_lambda` (the estimate's own λ when `None`).
+/// inertia of W̃(λ) at `count_lambda` (the estimate's own λ when `None`); without a certifier
+/// (an estimate left unchecked) no count and no bound.
 fn finish(
     local: Local,
     bound: Option<SparseBound>,
     count_lambda: Option<&[f64]>,
     rank: usize,
     iterations: usize,
-    certifier: &mut SparseCertifier,
+    mut certifier: Option<&mut SparseCertifier>,
     options: &StaircaseOptions,
 ) -> StaircaseSolution {
     let lambda = count_lambda.unwrap_or(&local.lambda);
-    let near_zero = certifier.near_zero(bound.as_ref(), lambda);
+    let near_zero = certifier
+        .as_deref_mut()
+        .and_then(|c| c.near_zero(bound.as_ref(), lambda));
     let lower_bound = bound.map_or(0.0, |b| b.lower_bound.max(0.0));
     let certified =
         bound.is_some() && local.cost - lower_bound <= options.tolerance * local.cost.max(1.0);
@@ -985,7 +978,7 @@ fn finish(
         rank,
         iterations,
         gradient_norm: local.gradient_norm,
-        factorizations: certifier.factorizations,
+        factorizations: certifier.map_or(0, |c| c.factorizations),
         near_zero,
         staircase_work: 0.0,
         limit_reached: false,
