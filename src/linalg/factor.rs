@@ -777,25 +777,15 @@ impl<T: Scalar> Assembly<T> {
     }
 
     /// The compressed-column pattern of `entries` (duplicates merged, rows sorted) by a
-    /// counting sort on the columns, O(nnz + dim), and each entry's slot in it. Hand-written:
-    /// faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve 3-5% faster on
-    /// M3500, intel and city10000 (medians of 21 interleaved runs). (For W̃ itself, 87 000
-    /// duplicated entries on M3500, faer's builder stayed faster: its fewer allocations.)
+    /// counting sort on the columns ([`column_buckets`]), O(nnz + dim), and each entry's slot in
+    /// it. Hand-written: faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve
+    /// 3-5% faster on M3500, intel and city10000 (medians of 21 interleaved runs). (W̃ itself,
+    /// whose values are summed once, is built by the same bucketing in
+    /// `problem::matrix`'s `Terms`.)
     fn from_entries(dim: usize, entries: Vec<(usize, usize)>) -> Self {
-        let mut start = vec![0usize; dim + 1];
-        for &(_, c) in &entries {
-            start[c + 1] += 1;
-        }
-        for c in 0..dim {
-            start[c + 1] += start[c];
-        }
+        let (start, order) = column_buckets(dim, entries.iter().map(|&(_, c)| c));
         // (row, entry index) bucketed by column, then sorted within each column.
-        let mut by_column = vec![(0usize, 0usize); entries.len()];
-        let mut next = start.clone();
-        for (k, &(r, c)) in entries.iter().enumerate() {
-            by_column[next[c]] = (r, k);
-            next[c] += 1;
-        }
+        let mut by_column: Vec<(usize, usize)> = order.iter().map(|&k| (entries[k].0, k)).collect();
         let mut col_ptr = Vec::with_capacity(dim + 1);
         let mut row_idx = Vec::with_capacity(entries.len());
         let mut slots = vec![0usize; entries.len()];
@@ -826,6 +816,29 @@ impl<T: Scalar> Assembly<T> {
             out[s] += *v;
         }
     }
+}
+
+/// The entries 0..len of a sparse matrix bucketed by their columns `cols` (a counting sort,
+/// O(len + dim)): `order[start[c]..start[c + 1]]` are the entries of column c, in their own
+/// order. Returns `(start, order)`.
+pub fn column_buckets(
+    dim: usize,
+    cols: impl Iterator<Item = usize> + Clone,
+) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; dim + 1];
+    for c in cols.clone() {
+        start[c + 1] += 1;
+    }
+    for c in 0..dim {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut order = vec![0usize; start[dim]];
+    for (k, c) in cols.enumerate() {
+        order[next[c]] = k;
+        next[c] += 1;
+    }
+    (start, order)
 }
 
 /// A fill-reducing rank of each pose: AMD on the pose graph (`n` nodes, `edges`). Ordering the

@@ -16,6 +16,7 @@
 //! p_0 are dropped (anchoring).
 
 use crate::graph::{Edge, Observation, Pose2, PoseGraph};
+use crate::linalg::factor::column_buckets;
 use crate::problem::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -297,19 +298,7 @@ impl Terms {
     /// order of additions is its), hence the same sums.
     fn matrix(self, dim: usize) -> SparseColMat<usize, c64> {
         let Terms { rows, cols, vals } = self;
-        let mut start = vec![0usize; dim + 1];
-        for &c in &cols {
-            start[c + 1] += 1;
-        }
-        for c in 0..dim {
-            start[c + 1] += start[c];
-        }
-        let mut next = start.clone();
-        let mut order = vec![0usize; cols.len()];
-        for (k, &c) in cols.iter().enumerate() {
-            order[next[c]] = k;
-            next[c] += 1;
-        }
+        let (start, mut order) = column_buckets(dim, cols.iter().copied());
         let mut col_ptr = Vec::with_capacity(dim + 1);
         let mut row_idx = Vec::with_capacity(rows.len());
         let mut values: Vec<c64> = Vec::with_capacity(rows.len());
