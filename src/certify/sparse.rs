@@ -273,6 +273,12 @@ impl SparseCertifier {
         }
     }
 
+    /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):
+    /// for a phase between two certificates that needs the memory, such as a Newton polish.
+    pub fn release_factor(&mut self) {
+        self.factor.release();
+    }
+
     /// The next certificate is of the same minimum, polished (multipliers moved by its last
     /// residual): its ladder starts at the shift that isolated this one's gap
     /// ([`ShiftMemory::hold`]).

@@ -70,6 +70,10 @@ pub struct SparseFactor<T> {
     side: Side,
     values: Vec<T>,
     mem: MemBuffer,
+    /// Whether `values` and `mem` have their room: allocated by the first factorization, not by
+    /// the analysis, so that a factor analyzed ahead of its use (on another thread while Newton
+    /// runs) holds no numeric memory until then.
+    allocated: bool,
     state: State,
 }
 
@@ -164,15 +168,14 @@ impl<T: Scalar> SparseFactor<T> {
         };
         let symbolic = factorize_symbolic_cholesky(pattern, Side::Upper, ordering, params)
             .expect("the symbolic analysis of a square pattern cannot fail but for memory");
-        let mut factor = SparseFactor {
+        SparseFactor {
             symbolic,
             side: Side::Upper,
             values: Vec::new(),
             mem: MemBuffer::new(StackReq::EMPTY),
+            allocated: false,
             state: State::None,
-        };
-        factor.allocate();
-        factor
+        }
     }
 
     /// Room for the numeric factor and the factorizations' and solves' workspace.
@@ -185,6 +188,7 @@ impl<T: Scalar> SparseFactor<T> {
         ]);
         self.values = vec![T::zero_impl(); symbolic.len_val()];
         self.mem = MemBuffer::new(req);
+        self.allocated = true;
     }
 
     /// Frees the numeric factor and the workspace but keeps the analysis (the next factorization
@@ -192,6 +196,7 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn release(&mut self) {
         self.values = Vec::new();
         self.mem = MemBuffer::new(StackReq::EMPTY);
+        self.allocated = false;
         self.state = State::None;
     }
 
@@ -239,7 +244,7 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn llt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
-        if self.values.len() != self.symbolic.len_val() {
+        if !self.allocated {
             self.allocate();
         }
         let stack = MemStack::new(&mut self.mem);
@@ -266,7 +271,7 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn ldlt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
-        if self.values.len() != self.symbolic.len_val() {
+        if !self.allocated {
             self.allocate();
         }
         let stack = MemStack::new(&mut self.mem);

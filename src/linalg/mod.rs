@@ -1,13 +1,15 @@
 //! Numerical linear algebra, knowing nothing of pose graphs: sparse LLᴴ/LDLᴴ factorizations with
 //! their a-posteriori backward errors ([`factor`]), the shift-invert subspace iteration for the
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
-//! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), and the
-//! seeded generator of random starts and simulations ([`rng`]).
+//! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
+//! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
+//! side on two cores with the same bits as on one ([`parallel`]).
 //!
 //! May use: faer and the standard library only; nothing else of pgo.
 
 pub mod eigen;
 pub mod factor;
+pub mod parallel;
 pub mod rng;
 pub mod roundoff;
 pub mod subspace;

@@ -129,7 +129,7 @@ impl Translations {
 
 /// The Newton system's layout at rank p: coordinates pose by pose (p translation coordinates
 /// unless the anchor, then 3p − 6 rotation ones unless the anchor), its pattern analyzed once.
-struct System {
+pub struct System {
     p: usize,
     offset: Vec<usize>,
     dims: Vec<usize>,
@@ -144,7 +144,8 @@ struct System {
 }
 
 impl System {
-    fn new(problem: &Problem3, p: usize) -> Self {
+    /// The system of rank p (its pattern depends on p and the graph alone).
+    pub fn new(problem: &Problem3, p: usize) -> Self {
         let n = problem.n;
         let dims: Vec<usize> = (0..n)
             .map(|u| {
@@ -468,13 +469,27 @@ pub struct LocalOptions {
 pub fn optimize(
     problem: &Problem3,
     translations: &mut Translations,
-    mut x: Point3,
+    x: Point3,
     options: &LocalOptions,
     report: &mut dyn FnMut(Step3),
 ) -> Local3 {
+    optimize_with(problem, translations, x, options, report, None)
+}
+
+/// As [`optimize`], with the Newton system of `x`'s rank when one was built ahead.
+pub fn optimize_with(
+    problem: &Problem3,
+    translations: &mut Translations,
+    mut x: Point3,
+    options: &LocalOptions,
+    report: &mut dyn FnMut(Step3),
+    system: Option<System>,
+) -> Local3 {
     let p = x.p;
     translations.project(problem, &mut x);
-    let mut sys = System::new(problem, p);
+    let mut sys = system
+        .filter(|s| s.p == p)
+        .unwrap_or_else(|| System::new(problem, p));
     let total_weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
     let mut cost = problem.cost(&x);
     let mut mu = 1e-6;

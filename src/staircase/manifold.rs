@@ -24,24 +24,40 @@ impl TangentBasis {
     pub fn new(problem: &Problem, x: &Point) -> Self {
         let p = x.p;
         let rows = problem.rows();
-        let mut offsets = Vec::with_capacity(rows + 1);
         let mut vectors = Vec::with_capacity(rows * 2 * p * p);
         for k in 0..rows {
-            offsets.push(vectors.len() / p);
             if k < problem.positions() {
                 position_basis(p, &mut vectors);
             } else {
                 sphere_basis(x.row(k), &mut vectors);
             }
         }
-        let off = vectors.len() / p;
-        offsets.push(off);
+        let offsets = Self::offsets(problem, p);
+        debug_assert_eq!(offsets[rows] * p, vectors.len());
         TangentBasis {
             p,
+            dim: offsets[rows],
             offsets,
             vectors,
-            dim: off,
         }
+    }
+
+    /// The offsets of every basis of rank p (they depend on p alone): a position row has 2p
+    /// coordinates (ℂᵖ as ℝ²ᵖ), a rotation row 2p − 1 (the tangent space of the unit sphere
+    /// |r_i| = 1 in ℂᵖ).
+    pub fn offsets(problem: &Problem, p: usize) -> Vec<usize> {
+        let mut offsets = Vec::with_capacity(problem.rows() + 1);
+        let mut off = 0;
+        offsets.push(off);
+        for k in 0..problem.rows() {
+            off += if k < problem.positions() {
+                2 * p
+            } else {
+                2 * p - 1
+            };
+            offsets.push(off);
+        }
+        offsets
     }
 
     /// The number of coordinates of row k.
@@ -234,15 +250,16 @@ pub struct NewtonSystem {
 }
 
 impl NewtonSystem {
-    pub fn new(problem: &Problem, basis: &TangentBasis) -> Self {
+    /// The system of every basis of rank p (its pattern depends on p alone).
+    pub fn new(problem: &Problem, p: usize) -> Self {
         // The entries of [`TangentBasis::hessian_pattern`] come in blocks, one per entry of W̃'s
         // upper triangle: the coordinates of its row by those of its column. Rows in the
         // problem's fill-reducing order, each row's coordinates together.
-        let rows = basis.offsets.len() - 1;
-        let sizes: Vec<usize> = (0..rows).map(|k| basis.len(k)).collect();
+        let offsets = TangentBasis::offsets(problem, p);
+        let sizes: Vec<usize> = offsets.windows(2).map(|w| w[1] - w[0]).collect();
         let blocks: Vec<(usize, usize)> = problem.upper.iter().map(|&(k, l, _)| (k, l)).collect();
         let row_order = problem.row_order();
-        let order = block_coordinates(&row_order, &basis.offsets);
+        let order = block_coordinates(&row_order, &offsets);
         // Supernodal: measured 1.6x (M3500c) to 2x (city10000) faster whole-process than faer's
         // own choice (simplicial) on these patterns. Assembled directly in its order and triangle.
         let layout = Layout::Supernodal;
