@@ -332,17 +332,18 @@ pub fn solve_anchored_from(
         "initialization (chordal)"
     });
     let anchored = Anchored::centered(graph, weights, &graph.poses);
+    let rank_one = |r: Vec<c64>| Point {
+        p: 1,
+        x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
+            .into_iter()
+            .chain(r)
+            .collect(),
+    };
     if let Some(start) = start {
         if graph.connected_components().1 != 1 {
             return None;
         }
-        let start = Point {
-            p: 1,
-            x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
-                .into_iter()
-                .chain(start_rotations(&anchored, start))
-                .collect(),
-        };
+        let start = rank_one(start_rotations(&anchored, start));
         let solution = solve_from(&anchored.problem, start, options, observer);
         return Some((solution, anchored));
     }
@@ -350,29 +351,25 @@ pub fn solve_anchored_from(
     // Poses joined only through landmarks have no rotation measurement between them: the
     // chordal relaxation of the rotations is then singular, and the rotations of the input's estimate (the
     // file's, or composed along the spanning tree through the landmarks) start instead.
-    let full = || {
-        (!graph.landmarks.is_empty())
-            .then(|| crate::staircase::init::chordal_full(&anchored.problem))
-            .flatten()
-    };
-    let r = full()
-        .or_else(|| chordal_rotations(&anchored.problem))
-        .or_else(|| {
-            (!graph.landmarks.is_empty()).then(|| {
-                let swap = swapper(anchored.anchor);
-                (0..graph.num_poses())
-                    .map(|k| crate::problem::matrix::rotation(graph.poses[swap(k)].theta))
-                    .collect()
+    let chordal = || {
+        let full = || {
+            (!graph.landmarks.is_empty())
+                .then(|| crate::staircase::init::chordal_full(&anchored.problem))
+                .flatten()
+        };
+        full()
+            .or_else(|| chordal_rotations(&anchored.problem))
+            .or_else(|| {
+                (!graph.landmarks.is_empty()).then(|| {
+                    let swap = swapper(anchored.anchor);
+                    (0..graph.num_poses())
+                        .map(|k| crate::problem::matrix::rotation(graph.poses[swap(k)].theta))
+                        .collect()
+                })
             })
-        })?;
-    let start = Point {
-        p: 1,
-        x: vec![c64::new(0.0, 0.0); anchored.problem.positions()]
-            .into_iter()
-            .chain(r)
-            .collect(),
+            .map(rank_one)
     };
-    let solution = solve_from(&anchored.problem, start, options, observer);
+    let solution = solve_from_start(&anchored.problem, chordal, options, observer)?;
     Some((solution, anchored))
 }
 
@@ -746,12 +743,25 @@ pub fn solve_from(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> StaircaseSolution {
+    solve_from_start(problem, || Some(start), options, observer)
+        .expect("a given start is always there")
+}
+
+/// As [`solve_from`], from the rank-1 point that `start` computes (the chordal initialization) on
+/// this thread while a second core builds the pattern's analyses; `None` when `start` finds none.
+fn solve_from_start(
+    problem: &Problem,
+    start: impl FnOnce() -> Option<Point>,
+    options: &StaircaseOptions,
+    observer: &mut dyn FnMut(&Iteration),
+) -> Option<StaircaseSolution> {
     let n = problem.n;
     // Variable projection at rank 1 (None only if L is not numerically positive definite). The
     // ranks above keep the joint steps: projecting their escape points made the paper's toy graph
     // (Appendix 8.8) stop at a saddle of rank 5 and end at rank 6 with a relaxation λ 6.5e-8 less
     // accurate, one of its two zero eigenvalues of W(λ*) lost.
-    let descend = |positions: Option<&mut OptimalPositions>,
+    let descend = |start: Point,
+                   positions: Option<&mut OptimalPositions>,
                    rank_one: &mut Option<NewtonSystem>,
                    observer: &mut dyn FnMut(&Iteration)| {
         crate::progress::phase("Newton");
@@ -769,38 +779,42 @@ pub fn solve_from(
         )
     };
     // The rank-1 Newton system's assembly and analysis, and the certificate's, depend on the
-    // pattern alone: with a second core they are built there while this thread factors L and
-    // descends (city10000: 15 ms and 11 ms of a 250 ms solve). Each is computed as it would be
-    // here, so the results are the same bits on one core or two. The certificate's factor
-    // allocates its values at its first factorization, after Newton's gave its memory back.
+    // pattern alone: with a second core they are built there while this thread computes the
+    // start, factors L and descends (city10000: 15 ms and 11 ms of a 250 ms solve). Each is
+    // computed as it would be here, so the results are the same bits on one core or two. The
+    // certificate's factor allocates its values at its first factorization, after Newton's gave
+    // its memory back.
     let ahead = |problem: &Problem| {
         options
             .certify
             .then(|| SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order()))
     };
-    let (mut positions, mut local, mut rank_one, certifier) =
-        if crate::linalg::parallel::second_core() {
-            std::thread::scope(|scope| {
-                let (send, receive) = std::sync::mpsc::channel();
-                let helper = scope.spawn(move || {
-                    // A closed channel only means the descent built its own system.
-                    let _ = send.send(NewtonSystem::new(problem, 1));
-                    ahead(problem)
-                });
-                let mut positions = OptimalPositions::new(problem);
-                let mut rank_one = receive.recv().ok();
-                let local = descend(positions.as_mut(), &mut rank_one, observer);
-                let certifier = helper
-                    .join()
-                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-                (positions, local, rank_one, certifier)
-            })
-        } else {
-            let mut positions = OptimalPositions::new(problem);
-            let mut rank_one = None;
-            let local = descend(positions.as_mut(), &mut rank_one, observer);
-            (positions, local, rank_one, ahead(problem))
-        };
+    let (mut positions, local, mut rank_one, certifier) = if crate::linalg::parallel::second_core()
+    {
+        std::thread::scope(|scope| {
+            let (send, receive) = std::sync::mpsc::channel();
+            let helper = scope.spawn(move || {
+                // A closed channel only means the descent built its own system.
+                let _ = send.send(NewtonSystem::new(problem, 1));
+                ahead(problem)
+            });
+            let start = start();
+            let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
+            let mut rank_one = receive.recv().ok();
+            let local = start.map(|s| descend(s, positions.as_mut(), &mut rank_one, observer));
+            let certifier = helper
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (positions, local, rank_one, certifier)
+        })
+    } else {
+        let start = start();
+        let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
+        let mut rank_one = None;
+        let local = start.map(|s| descend(s, positions.as_mut(), &mut rank_one, observer));
+        (positions, local, rank_one, ahead(problem))
+    };
+    let mut local = local?;
     // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
     // the certificate's.
     if let Some(system) = rank_one.as_mut() {
@@ -812,7 +826,7 @@ pub fn solve_from(
         let mut solution = finish(local, None, None, 1, iterations, None, options);
         solution.staircase_work = work;
         solution.limit_reached = limited;
-        return solution;
+        return Some(solution);
     };
     // The work so far in multiply-adds (the staircase's budget): Newton's factorizations, one
     // rank-1 step each, and the certificate's below.
@@ -860,7 +874,7 @@ pub fn solve_from(
         first = certifier.certify_cholesky(&local.lambda, &local.point.x, 1, reach_1);
     }
     if let Some(bound) = first {
-        return finish(
+        return Some(finish(
             local,
             Some(bound),
             None,
@@ -868,7 +882,7 @@ pub fn solve_from(
             iterations,
             Some(&mut certifier),
             options,
-        );
+        ));
     }
     // The staircase: lift along negative curvature, optimize at rank p (to a loose tolerance:
     // the minimum there is degenerate when the relaxation is exact, so Newton is slow to finish),
@@ -940,7 +954,7 @@ pub fn solve_from(
                 options,
             );
             solution.staircase_work = work(newton_work, &certifier);
-            return solution;
+            return Some(solution);
         }
     }
     // No certificate: the relaxation's bound at the last rank (converged tightly for it), or the
@@ -982,7 +996,7 @@ pub fn solve_from(
     );
     solution.limit_reached = limit_reached;
     solution.staircase_work = work(newton_work, &certifier);
-    solution
+    Some(solution)
 }
 
 /// The solution, with the near-zero eigenvalue count: the deflated proof's (one, proven) or the
