@@ -198,3 +198,63 @@ fn where_they_cannot_be_kept_or_are_malformed_exit_2() {
     }
     assert!(!out_graph.exists());
 }
+
+/// The edge lines of a g2o text in their order, as (tag, numbers).
+fn edge_lines(text: &str) -> Vec<(String, Vec<f64>)> {
+    text.lines()
+        .filter(|l| l.starts_with("EDGE_SE2"))
+        .map(|l| {
+            let mut f = l.split_whitespace();
+            let tag = f.next().unwrap().to_string();
+            (tag, f.map(|x| x.parse().unwrap()).collect())
+        })
+        .collect()
+}
+
+/// A file of 12000 edges of all three kinds is written with its edges in input order, every
+/// number kept: the writer formats the last edges on a second thread from 8192 edges on, and
+/// the two halves must join in order.
+#[test]
+fn convert_keeps_every_edge_in_order_in_large_files() {
+    let n = 6000;
+    let mut text = String::new();
+    for i in 0..n {
+        text += &format!(
+            "VERTEX_SE2 {i} {} {} {}\n",
+            i as f64 * 0.5,
+            (i % 7) as f64,
+            0.001 * i as f64
+        );
+    }
+    let mut switch = n;
+    for i in 0..n - 1 {
+        text += &format!("EDGE_SE2 {i} {} 0.5 0.25 0.001 100 0 0 100 0 1000\n", i + 1);
+        let j = (i * 37 + 11) % n;
+        if j == i {
+            continue;
+        }
+        if i % 2 == 0 {
+            text += &format!("VERTEX_SWITCH {switch} 1\nEDGE_SWITCH_PRIOR {switch} 1 1\n");
+            text += &format!(
+                "EDGE_SE2_SWITCHABLE {i} {j} {switch} {} -0.125 0.3 100 0 0 100 0 1000\n",
+                i as f64 / 8.0
+            );
+            switch += 1;
+        } else {
+            text += &format!(
+                "EDGE_SE2_MAXMIX {i} {j} 1e-7 {} 0 0.5 100 0 0 100 0 1000\n",
+                j as f64 / 4.0
+            );
+        }
+    }
+    let input_edges = edge_lines(&text);
+    assert!(input_edges.len() > 10000, "{}", input_edges.len());
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "large.g2o", &text);
+    let once = dir.path().join("once.g2o");
+    let out = run("pgo-convert", &[&input, "-o", once.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", common::text(&out.stderr));
+    let written = std::fs::read_to_string(&once).unwrap();
+    assert_eq!(edge_lines(&written), input_edges);
+    assert_eq!(lines(&written), lines(&text));
+}

@@ -90,72 +90,73 @@ fn write_named<W: Write>(
         }
         Ok(())
     };
-    for (id, pose) in graph.ids.iter().zip(&graph.poses) {
-        buf.extend_from_slice(vertex_tag.as_bytes());
-        let _ = write!(buf, " {id}");
-        for v in pose.values() {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
-        }
-        buf.push(b'\n');
-        put(&mut buf, &mut out)?;
-    }
     let marks = &graph.landmarks;
-    for (id, p) in marks.ids.iter().zip(&marks.positions) {
-        buf.extend_from_slice(landmark_vertex.as_bytes());
-        let _ = write!(buf, " {id}");
-        for &v in p {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
-        }
-        buf.push(b'\n');
-        put(&mut buf, &mut out)?;
-    }
-    for s in vertigo.map_or(&[][..], |v| &v.switches) {
-        let _ = write!(buf, "{} {} ", vertigo::VERTEX_SWITCH, s.id);
-        format_f64(s.value, &mut buf);
-        buf.push(b'\n');
-        put(&mut buf, &mut out)?;
-    }
-    for (k, e) in graph.edges.iter().enumerate() {
-        let kind = vertigo.map_or(EdgeKind::Plain, |v| v.kinds[k]);
-        match kind {
-            EdgeKind::Plain => {
-                buf.extend_from_slice(edge_tag.as_bytes());
-                let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+    // The edges' lines: with a second core, the last ones are formatted there into a buffer of
+    // their own while this thread writes the vertices and the first edges (each line is
+    // formatted alone, so the bytes are the same either way). A vertex line is about a third of
+    // an edge's.
+    let edges = EdgeLines {
+        graph,
+        vertigo,
+        edge_tag,
+        toro_order: options.dialect.toro_order(),
+    };
+    let m = graph.edges.len();
+    let split =
+        m >= PARALLEL_EDGES && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    let mid = if split {
+        m.saturating_sub(graph.poses.len() / 3) / 2
+    } else {
+        m
+    };
+    std::thread::scope(|scope| -> crate::Result<()> {
+        let last = split.then(|| {
+            scope.spawn(|| {
+                let mut last = Vec::with_capacity((m - mid) * 160);
+                for k in mid..m {
+                    edges.line(k, &mut last);
+                }
+                last
+            })
+        });
+        for (id, pose) in graph.ids.iter().zip(&graph.poses) {
+            buf.extend_from_slice(vertex_tag.as_bytes());
+            let _ = write!(buf, " {id}");
+            for v in pose.values() {
+                buf.push(b' ');
+                format_f64(v, &mut buf);
             }
-            EdgeKind::Switchable { switch } => {
-                let _ = write!(
-                    buf,
-                    "{} {} {} {switch}",
-                    vertigo::EDGE_SWITCHABLE,
-                    graph.ids[e.i],
-                    graph.ids[e.j]
-                );
-            }
-            EdgeKind::MaxMix { weight } => {
-                let _ = write!(
-                    buf,
-                    "{} {} {} ",
-                    vertigo::EDGE_MAXMIX,
-                    graph.ids[e.i],
-                    graph.ids[e.j]
-                );
-                format_f64(weight, &mut buf);
-            }
+            buf.push(b'\n');
+            put(&mut buf, &mut out)?;
         }
-        let noise = if options.dialect.toro_order() {
-            e.noise.to_toro()
-        } else {
-            e.noise.0
-        };
-        for v in e.measurement.values().into_iter().chain(noise) {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
+        for (id, p) in marks.ids.iter().zip(&marks.positions) {
+            buf.extend_from_slice(landmark_vertex.as_bytes());
+            let _ = write!(buf, " {id}");
+            for &v in p {
+                buf.push(b' ');
+                format_f64(v, &mut buf);
+            }
+            buf.push(b'\n');
+            put(&mut buf, &mut out)?;
         }
-        buf.push(b'\n');
-        put(&mut buf, &mut out)?;
-    }
+        for s in vertigo.map_or(&[][..], |v| &v.switches) {
+            let _ = write!(buf, "{} {} ", vertigo::VERTEX_SWITCH, s.id);
+            format_f64(s.value, &mut buf);
+            buf.push(b'\n');
+            put(&mut buf, &mut out)?;
+        }
+        for k in 0..mid {
+            edges.line(k, &mut buf);
+            put(&mut buf, &mut out)?;
+        }
+        if let Some(last) = last {
+            let last = last.join().expect("formatting lines does not panic");
+            out.write_all(&buf).map_err(io)?;
+            buf.clear();
+            out.write_all(&last).map_err(io)?;
+        }
+        Ok(())
+    })?;
     for o in &marks.observations {
         buf.extend_from_slice(observation_tag.as_bytes());
         let _ = write!(buf, " {} {}", graph.ids[o.pose], marks.ids[o.landmark]);
@@ -183,6 +184,60 @@ fn write_named<W: Write>(
     }
     out.write_all(&buf).map_err(io)?;
     out.flush().map_err(io)
+}
+
+/// Edges from which [`write`] formats the lines of two halves on two threads: at least this many.
+const PARALLEL_EDGES: usize = 8192;
+
+/// What an edge's line needs: the graph, its Vertigo kinds, the edge tag and the noise order.
+struct EdgeLines<'a> {
+    graph: &'a PoseGraph,
+    vertigo: Option<&'a Vertigo>,
+    edge_tag: &'a str,
+    toro_order: bool,
+}
+
+impl EdgeLines<'_> {
+    /// Appends the line of edge k.
+    fn line(&self, k: usize, buf: &mut Vec<u8>) {
+        let (graph, e) = (self.graph, &self.graph.edges[k]);
+        let kind = self.vertigo.map_or(EdgeKind::Plain, |v| v.kinds[k]);
+        match kind {
+            EdgeKind::Plain => {
+                buf.extend_from_slice(self.edge_tag.as_bytes());
+                let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+            }
+            EdgeKind::Switchable { switch } => {
+                let _ = write!(
+                    buf,
+                    "{} {} {} {switch}",
+                    vertigo::EDGE_SWITCHABLE,
+                    graph.ids[e.i],
+                    graph.ids[e.j]
+                );
+            }
+            EdgeKind::MaxMix { weight } => {
+                let _ = write!(
+                    buf,
+                    "{} {} {} ",
+                    vertigo::EDGE_MAXMIX,
+                    graph.ids[e.i],
+                    graph.ids[e.j]
+                );
+                format_f64(weight, buf);
+            }
+        }
+        let noise = if self.toro_order {
+            e.noise.to_toro()
+        } else {
+            e.noise.0
+        };
+        for v in e.measurement.values().into_iter().chain(noise) {
+            buf.push(b' ');
+            format_f64(v, buf);
+        }
+        buf.push(b'\n');
+    }
 }
 
 fn check_finite(graph: &PoseGraph) -> crate::Result<()> {
