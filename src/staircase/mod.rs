@@ -857,7 +857,9 @@ fn solve_from_start(
         let before = local.iterations;
         // The certificate's factor gives its memory to Newton's and takes it back after.
         certifier.release_factor();
+        crate::progress::phase("Newton polish, rank 1 (the certificate's bound fell short)");
         local = polish_in(problem, local, &mut rank_one);
+        crate::progress::phase("certificate");
         // Its memory goes to the certificate's factor again.
         rank_one = None;
         if local.iterations > before {
