@@ -3,6 +3,7 @@ use crate::linalg::factor::{Assembly, Layout, SparseFactor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::{c64, cx128, fx128};
+use std::sync::Arc;
 
 /// The sparse certificate of the scalable solver (docs/method.md §3.4). For a rank-1 estimate the
 /// proof is the deflated one of [`SparseCertifier::certify_rank_one`] (LDLᴴ inertia for the gap,
@@ -35,7 +36,8 @@ pub struct SparseCertifier {
     factor: SparseFactor<c64>,
     /// Position of each diagonal entry of W̃ in the upper-triangle entry list.
     diagonal: Vec<usize>,
-    entries: Vec<(usize, usize, c64)>,
+    /// W̃'s upper-triangle entries, shared with the problem.
+    entries: Arc<[(usize, usize, c64)]>,
     values: Vec<c64>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
@@ -80,7 +82,7 @@ impl SparseCertifier {
 
     /// Analyzes the pattern of W̃ (upper triangle entries, diagonal included, as in
     /// [`crate::problem::rank_p::Problem::upper`]) once, rows in a fill-reducing `order`; every later certificate reuses it.
-    pub fn new(dim: usize, upper: &[(usize, usize, c64)], order: &[usize]) -> Self {
+    pub fn new(dim: usize, upper: &Arc<[(usize, usize, c64)]>, order: &[usize]) -> Self {
         let pattern: Vec<(usize, usize)> = upper.iter().map(|&(r, c, _)| (r, c)).collect();
         let assembly = Assembly::<c64>::new(dim, &pattern);
         let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
@@ -94,7 +96,7 @@ impl SparseCertifier {
             assembly,
             factor,
             diagonal,
-            entries: upper.to_vec(),
+            entries: Arc::clone(upper),
             values: Vec::with_capacity(upper.len()),
             factorizations: 0,
             shifts: ShiftMemory::default(),
@@ -299,7 +301,7 @@ impl SparseCertifier {
         let rot0 = self.diagonal.len() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
         self.values.clear();
-        for &(r, c, v) in &self.entries {
+        for &(r, c, v) in self.entries.iter() {
             let s = scale[r] * scale[c];
             self.values.push(if r == c {
                 let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
@@ -362,7 +364,7 @@ impl SparseCertifier {
         for _ in 0..3 {
             let mut form = f64::MIN_POSITIVE;
             values.clear();
-            for &(r, c, v) in &self.entries {
+            for &(r, c, v) in self.entries.iter() {
                 let s = scale[r] * scale[c];
                 values.push(if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
@@ -440,7 +442,7 @@ impl SparseCertifier {
     fn alpha(&self, a: &[f64], scale: &[f64]) -> f64 {
         let dim = self.diagonal.len();
         let mut rows: Vec<f64> = (0..dim).map(|k| a[k] * scale[k] * scale[k]).collect();
-        for &(r, c, v) in &self.entries {
+        for &(r, c, v) in self.entries.iter() {
             if r != c {
                 let e = v.norm() * scale[r] * scale[c];
                 rows[r] += e;
@@ -467,7 +469,7 @@ impl SparseCertifier {
             alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
         self.values.clear();
-        for &(r, c, v) in &self.entries {
+        for &(r, c, v) in self.entries.iter() {
             let s = scale[r] * scale[c];
             self.values.push(if r == c {
                 c64::new(a[r] * s - alpha, 0.0)
@@ -511,7 +513,7 @@ impl SparseCertifier {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
         self.values.clear();
-        for &(r, c, v) in &self.entries {
+        for &(r, c, v) in self.entries.iter() {
             self.values.push(if r == c {
                 let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
                 c64::new(v.re - l - threshold, 0.0)

@@ -83,7 +83,7 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
     let mut entries = Vec::with_capacity(problem.upper.len());
     let mut values = Vec::with_capacity(problem.upper.len());
     let mut rhs = vec![c64::new(0.0, 0.0); dim];
-    for &(a, b, v) in &problem.upper {
+    for &(a, b, v) in problem.upper.iter() {
         match (a == r0, b == r0) {
             (true, true) => {}
             // W̃ y = −W̃[:, r0] · 1: the column of r0 moves to the right-hand side.

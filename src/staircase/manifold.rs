@@ -88,7 +88,7 @@ impl TangentBasis {
     /// [`TangentBasis::hessian_values`] produces, in the same order.
     pub fn hessian_pattern(&self, problem: &Problem) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
-        for &(k, l, _) in &problem.upper {
+        for &(k, l, _) in problem.upper.iter() {
             for s in 0..self.len(k) {
                 for t in 0..self.len(l) {
                     let (a, b) = (self.offsets[k] + s, self.offsets[l] + t);
@@ -106,7 +106,7 @@ impl TangentBasis {
     pub fn hessian_values(&self, problem: &Problem, lambda: &[f64], mu: f64, out: &mut Vec<f64>) {
         out.clear();
         let positions = problem.positions();
-        for &(k, l, w) in &problem.upper {
+        for &(k, l, w) in problem.upper.iter() {
             for s in 0..self.len(k) {
                 let bs = self.vector(k, s);
                 for t in 0..self.len(l) {
@@ -148,7 +148,7 @@ impl TangentBasis {
         }
         let row = |k: usize| &v[k * p..(k + 1) * p];
         let mut form = 0.0;
-        for &(k, l, w) in &problem.upper {
+        for &(k, l, w) in problem.upper.iter() {
             let t: f64 = row(k)
                 .iter()
                 .zip(row(l))
@@ -166,7 +166,7 @@ impl TangentBasis {
     /// The damping weights D (diag(2 W̃_kk) per coordinate).
     pub fn damping(&self, problem: &Problem) -> Vec<f64> {
         let mut d = vec![0.0; self.dim];
-        for &(k, l, w) in &problem.upper {
+        for &(k, l, w) in problem.upper.iter() {
             if k == l {
                 for s in 0..self.len(k) {
                     d[self.offsets[k] + s] = 2.0 * w.re;
