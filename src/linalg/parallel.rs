@@ -29,6 +29,42 @@ pub fn join<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send)
     })
 }
 
+/// `(main(ready), then())` with `first` and then `then` on a second core when [`second_core`]:
+/// `ready()` waits for `first`'s result and hands it over (once; `None` after, and `None` on one
+/// core, where `first` is not run and `main` builds what it needs itself, and `then` runs after
+/// `main`). For work that depends on a problem's pattern alone, built ahead while this thread
+/// starts and descends. A panic in `first` or `then` is resumed here.
+pub fn ahead<S: Send, C: Send, R>(
+    first: impl FnOnce() -> S + Send,
+    then: impl FnOnce() -> C + Send,
+    main: impl FnOnce(&dyn Fn() -> Option<S>) -> R,
+) -> (R, C) {
+    if !second_core() {
+        let r = main(&|| None);
+        return (r, then());
+    }
+    std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel();
+        let helper = scope.spawn(move || {
+            // A closed channel only means that `main` did not wait for `first`.
+            let _ = send.send(first());
+            then()
+        });
+        let taken = std::cell::Cell::new(false);
+        let r = main(&|| {
+            if taken.replace(true) {
+                None
+            } else {
+                receive.recv().ok()
+            }
+        });
+        let c = helper
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (r, c)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -43,6 +79,16 @@ mod tests {
         );
         assert_eq!(sum, 500_500);
         assert_eq!(squares, 1000 * 1001 * 2001 / 6);
+    }
+
+    /// `main` receives `first`'s result once (none on one core) and `then`'s comes back beside
+    /// `main`'s.
+    #[test]
+    fn ahead_hands_over_the_first_result_once() {
+        let ((got, again), then) = ahead(|| 41, || "then", |ready| (ready(), ready()));
+        assert_eq!(then, "then");
+        assert_eq!(again, None);
+        assert_eq!(got, second_core().then_some(41));
     }
 
     /// A panic on the second thread reaches the caller.

@@ -186,24 +186,11 @@ pub fn solve_graph3_from(
     // pattern alone: with a second core they are built there while this thread starts (L's
     // factor, the chordal estimate) and descends (parking-garage: 11 ms for the certificate's
     // analysis). Each is computed as it would be here: the same bits on one core or two.
-    let ((mut translations, first), mut certifier) = if crate::linalg::parallel::second_core() {
-        std::thread::scope(|scope| {
-            let (send, receive) = std::sync::mpsc::channel();
-            let problem = &problem;
-            let helper = scope.spawn(move || {
-                // A closed channel only means the descent built its own system.
-                let _ = send.send(System::new(problem, 3));
-                Certifier3::new(problem)
-            });
-            let descent = descend(receive.recv().ok(), report);
-            let certifier = helper
-                .join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-            (descent, certifier)
-        })
-    } else {
-        (descend(None, report), Certifier3::new(&problem))
-    };
+    let ((mut translations, first), mut certifier) = crate::linalg::parallel::ahead(
+        || System::new(&problem, 3),
+        || Certifier3::new(&problem),
+        |system| descend(system(), report),
+    );
     let mut iterations = first.iterations;
     let mut work = 0.0;
     crate::progress::phase("certificate");

@@ -784,36 +784,21 @@ fn solve_from_start(
     // computed as it would be here, so the results are the same bits on one core or two. The
     // certificate's factor allocates its values at its first factorization, after Newton's gave
     // its memory back.
-    let ahead = |problem: &Problem| {
-        options
-            .certify
-            .then(|| SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order()))
-    };
-    let (mut positions, local, mut rank_one, certifier) = if crate::linalg::parallel::second_core()
-    {
-        std::thread::scope(|scope| {
-            let (send, receive) = std::sync::mpsc::channel();
-            let helper = scope.spawn(move || {
-                // A closed channel only means the descent built its own system.
-                let _ = send.send(NewtonSystem::new(problem, 1));
-                ahead(problem)
-            });
+    let ((mut positions, local, mut rank_one), certifier) = crate::linalg::parallel::ahead(
+        || NewtonSystem::new(problem, 1),
+        || {
+            options
+                .certify
+                .then(|| SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order()))
+        },
+        |system| {
             let start = start();
             let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
-            let mut rank_one = receive.recv().ok();
+            let mut rank_one = system();
             let local = start.map(|s| descend(s, positions.as_mut(), &mut rank_one, observer));
-            let certifier = helper
-                .join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-            (positions, local, rank_one, certifier)
-        })
-    } else {
-        let start = start();
-        let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
-        let mut rank_one = None;
-        let local = start.map(|s| descend(s, positions.as_mut(), &mut rank_one, observer));
-        (positions, local, rank_one, ahead(problem))
-    };
+            (positions, local, rank_one)
+        },
+    );
     let mut local = local?;
     // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
     // the certificate's.

@@ -122,21 +122,13 @@ fn write_named<W: Write>(
         for (id, pose) in graph.ids.iter().zip(&graph.poses) {
             buf.extend_from_slice(vertex_tag.as_bytes());
             let _ = write!(buf, " {id}");
-            for v in pose.values() {
-                buf.push(b' ');
-                format_f64(v, &mut buf);
-            }
-            buf.push(b'\n');
+            end_line(pose.values(), &mut buf);
             put(&mut buf, &mut out)?;
         }
         for (id, p) in marks.ids.iter().zip(&marks.positions) {
             buf.extend_from_slice(landmark_vertex.as_bytes());
             let _ = write!(buf, " {id}");
-            for &v in p {
-                buf.push(b' ');
-                format_f64(v, &mut buf);
-            }
-            buf.push(b'\n');
+            end_line(p.iter().copied(), &mut buf);
             put(&mut buf, &mut out)?;
         }
         for s in vertigo.map_or(&[][..], |v| &v.switches) {
@@ -160,11 +152,7 @@ fn write_named<W: Write>(
     for o in &marks.observations {
         buf.extend_from_slice(observation_tag.as_bytes());
         let _ = write!(buf, " {} {}", graph.ids[o.pose], marks.ids[o.landmark]);
-        for &v in o.d.iter().chain(&o.information.0) {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
-        }
-        buf.push(b'\n');
+        end_line(o.d.iter().chain(&o.information.0).copied(), &mut buf);
         put(&mut buf, &mut out)?;
     }
     for p in vertigo.map_or(&[][..], |v| &v.priors) {
@@ -184,6 +172,15 @@ fn write_named<W: Write>(
     }
     out.write_all(&buf).map_err(io)?;
     out.flush().map_err(io)
+}
+
+/// Ends a line: each value after a space, then the newline.
+fn end_line(values: impl IntoIterator<Item = f64>, buf: &mut Vec<u8>) {
+    for v in values {
+        buf.push(b' ');
+        format_f64(v, buf);
+    }
+    buf.push(b'\n');
 }
 
 /// Edges from which [`write`] formats the lines of two halves on two threads: at least this many.
@@ -232,11 +229,7 @@ impl EdgeLines<'_> {
         } else {
             e.noise.0
         };
-        for v in e.measurement.values().into_iter().chain(noise) {
-            buf.push(b' ');
-            format_f64(v, buf);
-        }
-        buf.push(b'\n');
+        end_line(e.measurement.values().into_iter().chain(noise), buf);
     }
 }
 
@@ -467,21 +460,13 @@ fn write3_named(
     for (id, pose) in graph.ids.iter().zip(&graph.poses) {
         buf.extend_from_slice(vertex_tag.as_bytes());
         let _ = write!(buf, " {id}");
-        for v in pose.values() {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
-        }
-        buf.push(b'\n');
+        end_line(pose.values(), &mut buf);
         put(&mut buf, false)?;
     }
     for e in &graph.edges {
         buf.extend_from_slice(edge_tag.as_bytes());
         let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
-        for v in e.measurement.values().chain(e.information.0) {
-            buf.push(b' ');
-            format_f64(v, &mut buf);
-        }
-        buf.push(b'\n');
+        end_line(e.measurement.values().chain(e.information.0), &mut buf);
         put(&mut buf, false)?;
     }
     if !graph.fixed.is_empty() {
