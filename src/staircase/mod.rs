@@ -522,7 +522,7 @@ fn optimize_in(
     // Gauss-Newton model 2BᵀW̃B (⪰ 0: the λ term dropped) makes faster progress there. Exact
     // Newton takes over once a step gains less than 1% (quadratic convergence near the end).
     let zeros = vec![0.0; problem.n];
-    let mut gauss_newton = std::env::var_os("PGO_NO_GN").is_none();
+    let mut gauss_newton = true;
     let mut iterations = 0;
     let mut converged = false;
     let mut chord_next = false;
