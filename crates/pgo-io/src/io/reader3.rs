@@ -2,8 +2,9 @@
 //! (docs/formats.md §2.6, §3.4, §10), with the layout rules of the planar reader (comments, blank
 //! lines, CRLF, tabs, a BOM, trailing `# comments`, FIX anywhere, vertices after edges) and its
 //! strictness about values (every number finite and exactly representable, every id a valid
-//! `int`, exactly the number of fields). Line by line over the whole input: 3D files are small
-//! next to the planar city-scale ones the planar reader's two threads are for.
+//! `int`, exactly the number of fields). Line by line over the whole input (3D files are small
+//! next to the planar city-scale ones the planar reader's two threads are for), well-formed
+//! vertex and edge lines in one pass over their bytes, as the planar reader reads them.
 //!
 //! Decided here (docs/formats.md §10): a quaternion is kept as written and stands for q / |q|
 //! (g2o normalizes an edge's quaternion on reading); one that cannot be normalized is an error.
@@ -13,7 +14,7 @@
 //! blocks is kept as read with a warning (g2o loads any matrix; cubicle.g2o has such edges). Edges must join declared vertices (GTSAM's `load3D` does not
 //! invent them either). NaN and infinity are refused by the lexer, as in 2D.
 
-use super::lexer::{Field, parse_f64, parse_id, split_fields};
+use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
 use super::options::ReadOptions;
 use super::reader::ReadReport;
 use super::{Dialect, Format, g2o, toro};
@@ -44,6 +45,7 @@ const PLANAR: &[&str] = &[
     g2o::POINT2,
 ];
 
+#[cfg_attr(test, derive(Debug, PartialEq))]
 struct RawVertex {
     id: VertexId,
     line: usize,
@@ -51,6 +53,7 @@ struct RawVertex {
     pose: Pose3,
 }
 
+#[cfg_attr(test, derive(Debug, PartialEq))]
 struct RawEdge {
     i: VertexId,
     j: VertexId,
@@ -101,13 +104,44 @@ pub fn read3(
         } else {
             raw
         };
-        split_fields(line, &mut fields);
-        p.line(k + 1, line, &fields)?;
+        if !p.fast_line(k + 1, line) {
+            split_fields(line, &mut fields);
+            p.line(k + 1, line, &fields)?;
+        }
     }
     // As the planar reader counts them: a final line without a newline counts.
     let lines = memchr::memchr_iter(b'\n', bytes).count()
         + usize::from(bytes.last().is_some_and(|&c| c != b'\n'));
     p.finish(lines)
+}
+
+/// How many values a pose of `form` has: x y z, then a quaternion (g2o) or three Euler angles
+/// (TORO).
+fn pose_values(form: Form3) -> usize {
+    match form {
+        Form3::G2o => 7,
+        Form3::Toro => 6,
+    }
+}
+
+/// The pose of the values `v` (x y z, then the rotation of `form`); `None` for a quaternion that
+/// cannot be normalized.
+fn pose_of(v: &[f64; 7], form: Form3) -> Option<Pose3> {
+    let rotation = match form {
+        Form3::G2o => {
+            let q = [v[3], v[4], v[5], v[6]];
+            let norm2: f64 = q.iter().map(|x| x * x).sum();
+            if !(norm2 > 0.0 && norm2.is_finite()) {
+                return None;
+            }
+            Rotation3::Quaternion(q)
+        }
+        Form3::Toro => Rotation3::Euler([v[3], v[4], v[5]]),
+    };
+    Some(Pose3 {
+        translation: [v[0], v[1], v[2]],
+        rotation,
+    })
 }
 
 impl Parser<'_> {
@@ -259,28 +293,93 @@ impl Parser<'_> {
     /// A pose from its fields (x y z, then the rotation of `form`).
     fn pose(&self, line_no: usize, a: &[Field], form: Form3) -> Result<Pose3, ParseError> {
         let mut v = [0.0; 7];
-        let n = match form {
-            Form3::G2o => 7,
-            Form3::Toro => 6,
-        };
-        for (x, f) in v[..n].iter_mut().zip(a) {
+        for (x, f) in v[..pose_values(form)].iter_mut().zip(a) {
             *x = self.num(line_no, f)?;
         }
-        let rotation = match form {
-            Form3::G2o => {
-                let q = [v[3], v[4], v[5], v[6]];
-                let norm2: f64 = q.iter().map(|x| x * x).sum();
-                if !(norm2 > 0.0 && norm2.is_finite()) {
-                    return Err(self.error(line_no, a[3].col, ParseErrorKind::BadQuaternion));
-                }
-                Rotation3::Quaternion(q)
-            }
-            Form3::Toro => Rotation3::Euler([v[3], v[4], v[5]]),
+        pose_of(&v, form)
+            .ok_or_else(|| self.error(line_no, a[3].col, ParseErrorKind::BadQuaternion))
+    }
+
+    /// The hot path, as the planar reader's (`block.rs`): a well-formed vertex or edge line of
+    /// the form the file began with, in one pass over its bytes. Returns false, having recorded
+    /// nothing, for any other line or anything unusual in it (the first 3D line, a `# comment`
+    /// after the values, a number outside Clinger's fast path, a quaternion that cannot be
+    /// normalized, a self-loop): [`Self::line`] then reads it, and reports what is wrong. The
+    /// values are those of the general path, which takes the same scanner first.
+    fn fast_line(&mut self, line_no: usize, line: &[u8]) -> bool {
+        let mut s = line;
+        skip_space(&mut s);
+        let tag_len = s.iter().take_while(|c| !c.is_ascii_whitespace()).count();
+        let (tag, mut s) = s.split_at(tag_len);
+        let (form, vertex) = match tag {
+            t if t == G2O_VERTEX.as_bytes() => (Form3::G2o, true),
+            t if t == G2O_EDGE.as_bytes() => (Form3::G2o, false),
+            t if t == TORO_VERTEX.as_bytes() => (Form3::Toro, true),
+            t if t == TORO_EDGE.as_bytes() => (Form3::Toro, false),
+            _ => return false,
         };
-        Ok(Pose3 {
-            translation: [v[0], v[1], v[2]],
-            rotation,
-        })
+        if self.first_planar.is_some() || !matches!(&self.first, Some((f, _, _)) if *f == form) {
+            return false;
+        }
+        let col = |s: &[u8]| line.len() - s.len() + 1;
+        let mut ids = [(0, 0); 2];
+        for id in &mut ids[..if vertex { 1 } else { 2 }] {
+            skip_space(&mut s);
+            let at = col(s);
+            let Some(value) = scan_id(&mut s) else {
+                return false;
+            };
+            *id = (value, at);
+        }
+        let mut v = [0.0; 7];
+        for x in &mut v[..pose_values(form)] {
+            skip_space(&mut s);
+            let Some(value) = scan_f64(&mut s) else {
+                return false;
+            };
+            *x = value;
+        }
+        let mut info = [0.0; 21];
+        let mut col_noise = 0;
+        if !vertex {
+            skip_space(&mut s);
+            col_noise = col(s);
+            for x in &mut info {
+                skip_space(&mut s);
+                let Some(value) = scan_f64(&mut s) else {
+                    return false;
+                };
+                *x = value;
+            }
+        }
+        skip_space(&mut s);
+        let Some(pose) = pose_of(&v, form).filter(|_| s.is_empty()) else {
+            return false;
+        };
+        let [(i, col_i), (j, col_j)] = ids;
+        if vertex {
+            self.vertices.push(RawVertex {
+                id: i,
+                line: line_no,
+                col: col_i,
+                pose,
+            });
+        } else {
+            if i == j {
+                return false;
+            }
+            self.edges.push(RawEdge {
+                i,
+                j,
+                measurement: pose,
+                information: SymMat6(info),
+                line: line_no,
+                col_i,
+                col_j,
+                col_noise,
+            });
+        }
+        true
     }
 
     fn vertex(
@@ -534,5 +633,85 @@ impl Parser<'_> {
             vertigo: None,
         };
         Ok((graph, report))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parser(options: &ReadOptions, form: Form3) -> Parser<'_> {
+        Parser {
+            name: "test.g2o",
+            options,
+            vertices: Vec::new(),
+            edges: Vec::new(),
+            fixed: Vec::new(),
+            first: Some((form, 1, "the first line".into())),
+            unknown: Vec::new(),
+            equiv: None,
+            first_planar: None,
+        }
+    }
+
+    /// Whether the fast path takes `line`; when it does, it must record what the general path
+    /// records from the same line (values, ids, columns), bit for bit.
+    fn fast_matches_general(line: &str, form: Form3) -> bool {
+        let options = ReadOptions::default();
+        let (mut fast, mut general) = (parser(&options, form), parser(&options, form));
+        let taken = fast.fast_line(7, line.as_bytes());
+        let mut fields = Vec::new();
+        split_fields(line.as_bytes(), &mut fields);
+        let read = general.line(7, line.as_bytes(), &fields);
+        if taken {
+            assert!(
+                read.is_ok(),
+                "{line}: the general path refuses it: {read:?}"
+            );
+            assert_eq!(fast.vertices, general.vertices, "{line}");
+            assert_eq!(fast.edges, general.edges, "{line}");
+        } else {
+            assert!(fast.vertices.is_empty() && fast.edges.is_empty(), "{line}");
+        }
+        taken
+    }
+
+    /// The one-pass path against the field-by-field one on well-formed lines of both forms
+    /// (signs, exponents, leading zeros, tabs, CRLF, 19 digits), and lines it must leave to the
+    /// general path (a trailing comment, 20 digits, a significand above 2^53, a zero quaternion,
+    /// a self-loop, a missing or extra value, a negative id).
+    #[test]
+    fn the_fast_path_reads_what_the_general_path_reads() {
+        let info = "100 0 0 0 0 0 100 0 0 0 0 100 0 0 0 400 0 0 400 0 400";
+        for line in [
+            "VERTEX_SE3:QUAT 12 1.5 -2.25e-3 +3 0 0 0.7071067811865476 0.7071067811865475",
+            "  VERTEX_SE3:QUAT\t0\t0 0 0 0 0 0 1\r",
+            "VERTEX_SE3:QUAT 000123456 0.000000000000000001 1E22 -0.0 0.5 0.5 0.5 0.5",
+            &format!("EDGE_SE3:QUAT 3 4 1 2 3 0.1 0.2 0.3 0.9 {info}"),
+            &format!("EDGE_SE3:QUAT 4 3 -1e-5 2E+2 .5 0 0 -1 0 {info}\r"),
+        ] {
+            assert!(fast_matches_general(line, Form3::G2o), "{line}");
+        }
+        for line in [
+            "VERTEX3 5 1 2 3 0.1 -0.2 3.14159",
+            &format!("EDGE3 5 6 1 0 0 0 0 1.570796326794897 {info}"),
+        ] {
+            assert!(fast_matches_general(line, Form3::Toro), "{line}");
+        }
+        for line in [
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0 1 # a comment",
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0 12345678901234567890",
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0.70710678118654752 0.7071067811865476",
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0 0",
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0",
+            "VERTEX_SE3:QUAT 1 0 0 0 0 0 0 1 2",
+            "VERTEX_SE3:QUAT -1 0 0 0 0 0 0 1",
+            "VERTEX3 1 0 0 0 0 0 0",
+            &format!("EDGE_SE3:QUAT 3 3 1 2 3 0 0 0 1 {info}"),
+            &format!("EDGE_SE3:QUAT 3 4 1 2 3 0 0 0 1 {info} 1"),
+            "EDGE_SE3:QUAT 3 4 1 2 3 0 0 0 1 1 2 3",
+        ] {
+            assert!(!fast_matches_general(line, Form3::G2o), "{line}");
+        }
     }
 }
