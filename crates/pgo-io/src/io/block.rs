@@ -2,7 +2,9 @@
 //! does), well-formed vertex and edge lines take a one-pass fast path, everything else the
 //! general path that also reports what is wrong, with its line and column.
 
-use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
+use super::lexer::{
+    Field, parse_f64, parse_id, scan_f64, scan_f64s, scan_id, skip_space, split_fields,
+};
 use super::options::ReadOptions;
 use super::{g2o, toro};
 use crate::error::{Location, ParseError, ParseErrorKind};
@@ -261,12 +263,8 @@ impl BlockParser<'_> {
                 let Some(id) = scan_id(&mut s) else {
                     return false;
                 };
-                for x in &mut v {
-                    skip_space(&mut s);
-                    match scan_f64(&mut s) {
-                        Some(value) => *x = value,
-                        None => return false,
-                    }
+                if !scan_f64s(&mut s, &mut v) {
+                    return false;
                 }
                 skip_space(&mut s);
                 if !s.is_empty() {

@@ -176,6 +176,19 @@ pub fn scan_f64(s: &mut &[u8]) -> Option<f64> {
     Some(if negative { -value } else { value })
 }
 
+/// [`scan_f64`] for each of `out`'s values in turn, each after whitespace; false (with `s` at
+/// the value that failed) as soon as one is not on the fast path.
+pub fn scan_f64s(s: &mut &[u8], out: &mut [f64]) -> bool {
+    for x in out {
+        skip_space(s);
+        match scan_f64(s) {
+            Some(value) => *x = value,
+            None => return false,
+        }
+    }
+    true
+}
+
 /// Scans a vertex id of up to 9 digits (always below 2^31) ending at whitespace or the end of
 /// `s`, and advances `s` past it; `None`, with `s` unchanged, for anything else.
 pub fn scan_id(s: &mut &[u8]) -> Option<VertexId> {

@@ -14,7 +14,7 @@
 //! blocks is kept as read with a warning (g2o loads any matrix; cubicle.g2o has such edges). Edges must join declared vertices (GTSAM's `load3D` does not
 //! invent them either). NaN and infinity are refused by the lexer, as in 2D.
 
-use super::lexer::{Field, parse_f64, parse_id, scan_f64, scan_id, skip_space, split_fields};
+use super::lexer::{Field, parse_f64, parse_id, scan_f64s, scan_id, skip_space, split_fields};
 use super::options::ReadOptions;
 use super::reader::ReadReport;
 use super::{Dialect, Format, g2o, toro};
@@ -332,24 +332,16 @@ impl Parser<'_> {
             *id = (value, at);
         }
         let mut v = [0.0; 7];
-        for x in &mut v[..pose_values(form)] {
-            skip_space(&mut s);
-            let Some(value) = scan_f64(&mut s) else {
-                return false;
-            };
-            *x = value;
+        if !scan_f64s(&mut s, &mut v[..pose_values(form)]) {
+            return false;
         }
         let mut info = [0.0; 21];
         let mut col_noise = 0;
         if !vertex {
             skip_space(&mut s);
             col_noise = col(s);
-            for x in &mut info {
-                skip_space(&mut s);
-                let Some(value) = scan_f64(&mut s) else {
-                    return false;
-                };
-                *x = value;
+            if !scan_f64s(&mut s, &mut info) {
+                return false;
             }
         }
         skip_space(&mut s);
