@@ -15,18 +15,17 @@ pub const ZERO_FACTOR: f64 = 1e3;
 
 /// The absolute zero threshold for the eigenvalues of W̃(λ*) (see [`ZERO_FACTOR`]), given the
 /// duality gap the SDP solver reached.
-/// Summed over the stored entries column by column: the same sums as over the dense matrix.
+/// ‖W̃‖_F from the stored upper triangle, each entry above the diagonal counted twice.
 pub fn zero_threshold(matrix: &PoseGraphMatrix, duality_gap: f64) -> f64 {
     let d = matrix.dim();
     let mut max_diag = 1.0f64;
     let mut fro2 = 0.0;
-    for c in 0..d {
-        let rows = matrix.w.symbolic().row_idx_of_col_raw(c);
-        for (&r, v) in rows.iter().zip(matrix.w.val_of_col(c)) {
-            if r == c {
-                max_diag = max_diag.max(v.re);
-            }
+    for (r, c, v) in matrix.upper_entries() {
+        if r == c {
+            max_diag = max_diag.max(v.re);
             fro2 += v.norm_sqr();
+        } else {
+            fro2 += 2.0 * v.norm_sqr();
         }
     }
     let rounding = d as f64 * f64::EPSILON * fro2.sqrt();

@@ -16,7 +16,6 @@
 //! p_0 are dropped (anchoring).
 
 use crate::graph::{Edge, Observation, Pose2, PoseGraph};
-use crate::linalg::factor::column_buckets;
 use crate::problem::weights::EdgeWeight;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -39,8 +38,10 @@ pub struct PoseGraphMatrix {
     pub n: usize,
     /// Number of landmarks m.
     pub m: usize,
-    /// W̃, (2n−1+m) x (2n−1+m) Hermitian, both triangles stored.
-    pub w: SparseColMat<usize, c64>,
+    /// The upper triangle of W̃ ((2n−1+m) x (2n−1+m) Hermitian), every diagonal entry stored
+    /// (zero for a pose without edges), so that penalized and shifted matrices share its
+    /// pattern.
+    pub upper: SparseColMat<usize, c64>,
 }
 
 /// The complex number of a measurement's translation, Δ = dx + i·dy.
@@ -71,64 +72,28 @@ impl PoseGraphMatrix {
         let p = |k: usize| (k > 0).then(|| k - 1);
         let lm = |k: usize| Some(n - 1 + k);
         let r = |k: usize| n - 1 + m + k;
-        let mut t = Terms::with_capacity(16 * graph.edges.len() + 12 * marks.observations.len());
-        // An off-diagonal term v at (a, b) and its conjugate at (b, a); a diagonal term once.
-        let mut add = |a: Option<usize>, b: Option<usize>, v: c64| {
-            if let (Some(a), Some(b)) = (a, b) {
-                t.push(a, b, v);
-                t.push(b, a, v.conj());
+        let terms = |out: &mut Upper| {
+            for (e, w) in graph.edges.iter().zip(weights) {
+                let (i, j) = (e.i, e.j);
+                let delta = translation(e.measurement);
+                out.translation(p(i), p(j), r(i), delta, w.tau, w.kappa);
+                out.diagonal(Some(r(j)), w.kappa);
+                out.pair(
+                    Some(r(j)),
+                    Some(r(i)),
+                    -rotation(e.measurement.theta) * w.kappa,
+                );
+            }
+            for (o, w) in marks.observations.iter().zip(&weights[graph.edges.len()..]) {
+                let d = c64::new(o.d[0], o.d[1]);
+                out.translation(p(o.pose), lm(o.landmark), r(o.pose), d, w.tau, 0.0);
             }
         };
-        // Diagonal terms are added as halves of a pair.
-        let half = c64::new(0.5, 0.0);
-        // τ |p_j − p_i − Δ r_i|² (the translation part of an edge, or an observation), with κ
-        // (the edge's rotation weight, 0 for an observation) added to the (r_i, r_i) entry, in
-        // the order and roundings of the pose-graph terms.
-        let translation_term = |add: &mut dyn FnMut(Option<usize>, Option<usize>, c64),
-                                pi: Option<usize>,
-                                pj: Option<usize>,
-                                ri: usize,
-                                delta: c64,
-                                tau: f64,
-                                kappa: f64| {
-            let tau_c = c64::new(tau, 0.0);
-            add(pi, pi, half * tau_c);
-            add(pj, pj, half * tau_c);
-            add(pi, pj, -tau_c);
-            add(pi, Some(ri), tau_c * delta);
-            add(pj, Some(ri), -tau_c * delta);
-            add(
-                Some(ri),
-                Some(ri),
-                half * c64::new(tau * delta.norm_sqr() + kappa, 0.0),
-            );
-        };
-        for (e, w) in graph.edges.iter().zip(weights) {
-            let (i, j) = (e.i, e.j);
-            let delta = translation(e.measurement);
-            let big_r = rotation(e.measurement.theta);
-            translation_term(&mut add, p(i), p(j), r(i), delta, w.tau, w.kappa);
-            let kappa = c64::new(w.kappa, 0.0);
-            add(Some(r(j)), Some(r(j)), half * kappa);
-            add(Some(r(j)), Some(r(i)), -kappa * big_r);
-        }
-        for (o, w) in marks.observations.iter().zip(&weights[graph.edges.len()..]) {
-            let d = c64::new(o.d[0], o.d[1]);
-            translation_term(
-                &mut add,
-                p(o.pose),
-                lm(o.landmark),
-                r(o.pose),
-                d,
-                w.tau,
-                0.0,
-            );
-        }
         let dim = 2 * n - 1 + m;
         PoseGraphMatrix {
             n,
             m,
-            w: t.matrix(dim),
+            upper: upper_triangle(dim, terms),
         }
     }
 
@@ -143,9 +108,24 @@ impl PoseGraphMatrix {
         2 * self.n - 1 + self.m
     }
 
+    /// The stored entries (row ≤ column) with their values, column by column.
+    pub fn upper_entries(&self) -> impl Iterator<Item = (usize, usize, c64)> + '_ {
+        (0..self.dim()).flat_map(move |col| {
+            let rows = self.upper.symbolic().row_idx_of_col_raw(col);
+            rows.iter()
+                .zip(self.upper.val_of_col(col))
+                .map(move |(&row, &v)| (row, col, v))
+        })
+    }
+
     /// W̃ as a dense matrix.
     pub fn dense(&self) -> Mat<c64> {
-        self.w.to_dense()
+        let mut w = Mat::zeros(self.dim(), self.dim());
+        for (r, c, v) in self.upper_entries() {
+            w[(r, c)] = v;
+            w[(c, r)] = v.conj();
+        }
+        w
     }
 
     /// The penalized pose graph matrix W̃(λ) = W̃ − blkdiag(0, diag(λ)) (Sec. 4.1), dense.
@@ -249,78 +229,129 @@ impl PoseGraphMatrix {
             .collect()
     }
 
-    /// The quadratic form x̃* W̃ x̃.
+    /// The quadratic form x̃* W̃ x̃ = Σ_a W̃_aa |x_a|² + 2 Re Σ_{a<b} x̄_a W̃_ab x_b.
     pub fn quadratic_form(&self, x: &[c64]) -> f64 {
         assert_eq!(x.len(), self.dim());
-        let mut s = c64::new(0.0, 0.0);
-        for (col, xc) in x.iter().enumerate() {
-            let rows = self.w.symbolic().row_idx_of_col_raw(col);
-            let vals = self.w.val_of_col(col);
-            for (&row, v) in rows.iter().zip(vals) {
-                s += x[row].conj() * v * xc;
-            }
-        }
-        s.re
+        self.upper_entries()
+            .map(|(r, c, v)| {
+                let t = (x[r].conj() * v * x[c]).re;
+                if r == c { t } else { 2.0 * t }
+            })
+            .fold(0.0, |a, b| a + b)
     }
 }
 
-/// The terms of W̃, (row, column, value) in the order the edges add them, and the matrix they
-/// sum to.
-struct Terms {
-    rows: Vec<usize>,
-    cols: Vec<usize>,
-    vals: Vec<c64>,
+/// Where the edges' terms of W̃ go ([`upper_triangle`]): each entry of the upper triangle
+/// (row ≤ column) as it is added, an entry below the diagonal as its conjugate above.
+struct Upper<'a>(&'a mut dyn FnMut(usize, usize, c64));
+
+impl Upper<'_> {
+    /// x on the diagonal at `a` (nothing for the anchor, which has no row).
+    fn diagonal(&mut self, a: Option<usize>, x: f64) {
+        if let Some(a) = a {
+            (self.0)(a, a, c64::new(x, 0.0));
+        }
+    }
+
+    /// v at (a, b) and v̄ at (b, a).
+    fn pair(&mut self, a: Option<usize>, b: Option<usize>, v: c64) {
+        match (a, b) {
+            (Some(a), Some(b)) if a < b => (self.0)(a, b, v),
+            (Some(a), Some(b)) if a > b => (self.0)(b, a, v.conj()),
+            (Some(a), Some(_)) => {
+                (self.0)(a, a, v);
+                (self.0)(a, a, v.conj());
+            }
+            _ => {}
+        }
+    }
+
+    /// τ |p_j − p_i − Δ r_i|² (the translation part of an edge, or an observation with l_k for
+    /// p_j), with κ (the edge's rotation weight, 0 for an observation) on (r_i, r_i): τ at
+    /// (p_i, p_i) and (p_j, p_j), −τ at (p_i, p_j), τΔ at (p_i, r_i), −τΔ at (p_j, r_i),
+    /// τ|Δ|² + κ at (r_i, r_i).
+    #[allow(clippy::too_many_arguments)]
+    fn translation(
+        &mut self,
+        pi: Option<usize>,
+        pj: Option<usize>,
+        ri: usize,
+        delta: c64,
+        tau: f64,
+        kappa: f64,
+    ) {
+        self.diagonal(pi, tau);
+        self.diagonal(pj, tau);
+        self.pair(pi, pj, c64::new(-tau, 0.0));
+        self.pair(pi, Some(ri), delta * tau);
+        self.pair(pj, Some(ri), delta * -tau);
+        self.diagonal(Some(ri), tau * delta.norm_sqr() + kappa);
+    }
 }
 
-impl Terms {
-    fn with_capacity(capacity: usize) -> Self {
-        Terms {
-            rows: Vec::with_capacity(capacity),
-            cols: Vec::with_capacity(capacity),
-            vals: Vec::with_capacity(capacity),
-        }
+/// The upper triangle (every diagonal entry included, zero or not) of the `dim` x `dim` Hermitian
+/// matrix that `terms` adds up, each entry the sum of its terms in the order `terms` gives them,
+/// from 0; rows ascending in each column. Two passes over the terms (count each column's, then
+/// place them) and one over the columns (duplicates summed through a row marker, the distinct
+/// rows sorted): O(terms + nnz·log(column length)) and 24 bytes per term, where sorting
+/// (row, column, value) triplets of both triangles took ten times the memory and, on city10000,
+/// a tenth of pgo-solve's run.
+fn upper_triangle(dim: usize, terms: impl Fn(&mut Upper)) -> SparseColMat<usize, c64> {
+    // Each column's first term is a zero on its diagonal.
+    let mut start = vec![1usize; dim + 1];
+    start[0] = 0;
+    terms(&mut Upper(&mut |_, c, _| start[c + 1] += 1));
+    for c in 0..dim {
+        start[c + 1] += start[c];
     }
-
-    fn push(&mut self, row: usize, col: usize, val: c64) {
-        self.rows.push(row);
-        self.cols.push(col);
-        self.vals.push(val);
+    let mut rows = vec![0usize; start[dim]];
+    let mut vals = vec![c64::new(0.0, 0.0); start[dim]];
+    let mut next: Vec<usize> = start[..dim].to_vec();
+    for (c, k) in next.iter_mut().enumerate() {
+        rows[*k] = c;
+        *k += 1;
     }
-
-    /// The `dim` x `dim` matrix Σ of the terms, duplicates summed: entry for entry and bit for
-    /// bit the one faer's `SparseColMat::try_new_from_triplets` builds (faer 0.24: the terms'
-    /// indices bucketed by column in their order, each bucket sorted by `sort_unstable_by_key`
-    /// on the row, duplicates added in the sorted order), from the rows, columns and values in
-    /// separate arrays. faer's builder reads a 32-byte triplet at a random place for every key
-    /// of its sort and every value it adds: on city10000 (331 000 terms) it took 9% of
-    /// pgo-solve's whole run. The same sort of the same indices under the same comparisons
-    /// gives the same permutation (an unstable sort may order equal rows either way, and the
-    /// order of additions is its), hence the same sums.
-    fn matrix(self, dim: usize) -> SparseColMat<usize, c64> {
-        let Terms { rows, cols, vals } = self;
-        let (start, mut order) = column_buckets(dim, cols.iter().copied());
-        let mut col_ptr = Vec::with_capacity(dim + 1);
-        let mut row_idx = Vec::with_capacity(rows.len());
-        let mut values: Vec<c64> = Vec::with_capacity(rows.len());
-        col_ptr.push(0);
-        for c in 0..dim {
-            let bucket = &mut order[start[c]..start[c + 1]];
-            bucket.sort_unstable_by_key(|&k| rows[k]);
-            let first = row_idx.len();
-            for &k in bucket.iter() {
-                if row_idx.len() > first && row_idx.last() == Some(&rows[k]) {
-                    let last = values.len() - 1;
-                    values[last] += vals[k];
-                } else {
-                    row_idx.push(rows[k]);
-                    values.push(vals[k]);
-                }
+    terms(&mut Upper(&mut |r, c, v| {
+        rows[next[c]] = r;
+        vals[next[c]] = v;
+        next[c] += 1;
+    }));
+    drop(next);
+    // Column by column, in place: a column's entries never outnumber its terms, so they are
+    // written at or before the place its terms are read from.
+    let mut mark = vec![usize::MAX; dim];
+    let mut slot = vec![0usize; dim];
+    let mut column: Vec<(usize, c64)> = Vec::new();
+    let mut col_ptr = Vec::with_capacity(dim + 1);
+    col_ptr.push(0);
+    for c in 0..dim {
+        column.clear();
+        for k in start[c]..start[c + 1] {
+            let r = rows[k];
+            if mark[r] == c {
+                column[slot[r]].1 += vals[k];
+            } else {
+                mark[r] = c;
+                slot[r] = column.len();
+                column.push((r, vals[k]));
             }
-            col_ptr.push(row_idx.len());
         }
-        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
-        SparseColMat::new(symbolic, values)
+        column.sort_unstable_by_key(|&(r, _)| r);
+        let first = col_ptr[c];
+        for (k, &(r, v)) in column.iter().enumerate() {
+            rows[first + k] = r;
+            vals[first + k] = v;
+        }
+        col_ptr.push(first + column.len());
     }
+    let nnz = col_ptr[dim];
+    // The matrix lives as long as its problem: without the terms' room.
+    rows.truncate(nnz);
+    rows.shrink_to_fit();
+    vals.truncate(nnz);
+    vals.shrink_to_fit();
+    let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, rows);
+    SparseColMat::new(symbolic, vals)
 }
 
 /// The Cholesky factor of the anchored Laplacian L (as a complex matrix, to solve with S̃);
@@ -445,45 +476,65 @@ pub(crate) mod tests {
         m.self_adjoint_eigenvalues(Side::Lower).unwrap()
     }
 
-    /// [`Terms::matrix`] is faer's `try_new_from_triplets` bit for bit: the same pattern and the
-    /// same sums, on terms with many duplicates (columns of up to 200 terms, beyond the lengths
-    /// a sort handles by insertion, where an unstable sort reorders equal rows) whose sums
-    /// depend on the order of their additions (values of magnitudes 1e-8 to 1e8), and on empty
-    /// columns.
+    /// [`upper_triangle`] against a dense matrix summed term by term in the same order: the same
+    /// pattern (the entries the terms touch, and every diagonal entry) and the same sums bit for
+    /// bit, on terms of both triangles with many duplicates (columns of up to 200 terms) whose
+    /// sums depend on the order of their additions (magnitudes 1e-8 to 1e8), and on rows without
+    /// terms.
     #[test]
-    fn terms_sum_to_faers_matrix_bit_for_bit() {
-        use faer::sparse::Triplet;
+    fn upper_triangle_sums_the_terms_in_their_order() {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-        for (dim, count, rows_per_col) in [(1, 3, 1), (7, 40, 3), (30, 2000, 4), (50, 6000, 12)] {
-            let mut terms = Terms::with_capacity(count);
-            let mut triplets = Vec::with_capacity(count);
+        for (dim, count, spread) in [(1, 3, 1), (7, 40, 3), (30, 2000, 4), (50, 6000, 12)] {
+            let mut ops = Vec::with_capacity(count);
             for _ in 0..count {
-                let col = (rng.next() * dim as f64) as usize % dim;
-                // Rows from a few per column (many duplicates), some columns left empty.
-                let row = (col + (rng.next() * rows_per_col as f64) as usize) % dim;
-                if col % 5 == 3 {
+                let a = (rng.next() * dim as f64) as usize % dim;
+                let b = (a + (rng.next() * spread as f64) as usize) % dim;
+                if a % 5 == 3 || b % 5 == 3 {
                     continue;
                 }
                 let scale = 10f64.powi((rng.next() * 16.0) as i32 - 8);
-                let val = c64::new(rng.range(-1.0, 1.0) * scale, rng.range(-1.0, 1.0) * scale);
-                terms.push(row, col, val);
-                triplets.push(Triplet::new(row, col, val));
+                let v = c64::new(rng.range(-1.0, 1.0) * scale, rng.range(-1.0, 1.0) * scale);
+                // Half of them given from below the diagonal.
+                ops.push(if rng.next() < 0.5 {
+                    (a, b, v)
+                } else {
+                    (b, a, v)
+                });
             }
-            let ours = terms.matrix(dim);
-            let faers = SparseColMat::try_new_from_triplets(dim, dim, &triplets).unwrap();
-            assert_eq!(
-                ours.symbolic().col_ptr(),
-                faers.symbolic().col_ptr(),
-                "dim {dim}"
-            );
-            assert_eq!(ours.symbolic().row_idx(), faers.symbolic().row_idx());
-            let bits = |m: &SparseColMat<usize, c64>| -> Vec<(u64, u64)> {
-                m.val()
-                    .iter()
-                    .map(|v| (v.re.to_bits(), v.im.to_bits()))
-                    .collect()
+            let ours = upper_triangle(dim, |out| {
+                for &(a, b, v) in &ops {
+                    if a == b {
+                        out.diagonal(Some(a), v.re);
+                    } else {
+                        out.pair(Some(a), Some(b), v);
+                    }
+                }
+            });
+            let mut dense = vec![vec![None::<c64>; dim]; dim];
+            for (k, row) in dense.iter_mut().enumerate() {
+                row[k] = Some(c64::new(0.0, 0.0));
+            }
+            for &(a, b, v) in &ops {
+                let (r, c, v) = match a.cmp(&b) {
+                    std::cmp::Ordering::Less => (a, b, v),
+                    std::cmp::Ordering::Greater => (b, a, v.conj()),
+                    std::cmp::Ordering::Equal => (a, a, c64::new(v.re, 0.0)),
+                };
+                let e = dense[r][c].get_or_insert(c64::new(0.0, 0.0));
+                *e += v;
+            }
+            let bits = |v: c64| (v.re.to_bits(), v.im.to_bits());
+            let want: Vec<(usize, usize, (u64, u64))> = (0..dim)
+                .flat_map(|c| (0..=c).map(move |r| (r, c)))
+                .filter_map(|(r, c)| dense[r][c].map(|v| (r, c, bits(v))))
+                .collect();
+            let m = PoseGraphMatrix {
+                n: 1,
+                m: dim - 1,
+                upper: ours,
             };
-            assert_eq!(bits(&ours), bits(&faers), "dim {dim}");
+            let got: Vec<_> = m.upper_entries().map(|(r, c, v)| (r, c, bits(v))).collect();
+            assert_eq!(got, want, "dim {dim}");
         }
     }
 

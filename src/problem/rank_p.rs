@@ -143,26 +143,8 @@ impl Problem {
             )
             .collect();
         let matrix = PoseGraphMatrix::new(graph, weights);
-        let mut upper = Vec::with_capacity(matrix.w.compute_nnz() / 2 + matrix.dim());
-        for col in 0..matrix.dim() {
-            let rows = matrix.w.symbolic().row_idx_of_col_raw(col);
-            for (&row, v) in rows.iter().zip(matrix.w.val_of_col(col)) {
-                if row <= col {
-                    upper.push((row, col, *v));
-                }
-            }
-        }
-        // Every diagonal entry is in the pattern, zero or not (a pose without edges has none in
-        // W̃), so that penalized and shifted matrices can be built on it.
-        let mut has_diagonal = vec![false; matrix.dim()];
-        for &(r, c, _) in &upper {
-            if r == c {
-                has_diagonal[r] = true;
-            }
-        }
-        for (k, _) in has_diagonal.iter().enumerate().filter(|(_, h)| !**h) {
-            upper.push((k, k, c64::new(0.0, 0.0)));
-        }
+        let mut upper = Vec::with_capacity(matrix.upper.compute_nnz());
+        upper.extend(matrix.upper_entries());
         (terms, matrix, upper)
     }
 
