@@ -85,7 +85,8 @@ impl SparseCertifier {
     pub fn new(dim: usize, upper: &Arc<[(usize, usize, c64)]>, order: &[usize]) -> Self {
         let pattern: Vec<(usize, usize)> = upper.iter().map(|&(r, c, _)| (r, c)).collect();
         let assembly = Assembly::<c64>::new(dim, &pattern);
-        let factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
+        let factor =
+            SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::AutoComplex);
         let mut diagonal = vec![usize::MAX; dim];
         for (k, &(r, c, _)) in upper.iter().enumerate() {
             if r == c {
