@@ -270,7 +270,6 @@ impl Upper<'_> {
     /// p_j), with κ (the edge's rotation weight, 0 for an observation) on (r_i, r_i): τ at
     /// (p_i, p_i) and (p_j, p_j), −τ at (p_i, p_j), τΔ at (p_i, r_i), −τΔ at (p_j, r_i),
     /// τ|Δ|² + κ at (r_i, r_i).
-    #[allow(clippy::too_many_arguments)]
     fn translation(
         &mut self,
         pi: Option<usize>,
