@@ -39,6 +39,15 @@ pub enum Layout {
     /// below 15 simplicial stays ahead: M3500 (13) 4.1/2.9 and 3.0/4.4 ms on two runs,
     /// cityTrees10000 (7.5) 4.4/8.8 ms, ais2klinik (4.9) 4.4/10.9 ms.
     AutoComplex,
+    /// As `Auto`, with the crossover measured for the staircase's real Newton systems (the
+    /// planar ones: 1x1 rotation and 2x2 position blocks at rank 1): supernodal from a flop
+    /// ratio of 12. On sparser factors the supernodes are small and their padding and per-block
+    /// overhead cost more than the dense kernels gain; the solve suffers most. Measured (median
+    /// of 31 assemblies + LLᵀ + solves of each layout, interleaved, simplicial/supernodal):
+    /// ratio 4-7 (kitti, ais2klinik, CSAIL, MIT, ring) 0.53-0.71, victoriaPark (8.5) 0.69,
+    /// intel (9.8) 0.86, FRH (9.4) 1.02, intel_openslam (12.9) 1.10, cityTrees10000 (14.6)
+    /// 0.97, M3500 (19) 1.23-1.29, w10000 (35) 2.2, city10000 (43.5) 2.5.
+    AutoNewton,
     Simplicial,
     Supernodal,
 }
@@ -48,6 +57,7 @@ impl Layout {
         match self {
             Layout::Auto => SupernodalThreshold::AUTO,
             Layout::AutoComplex => SupernodalThreshold(15.0 / 40.0),
+            Layout::AutoNewton => SupernodalThreshold(12.0 / 40.0),
             Layout::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
             Layout::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
         }
@@ -58,7 +68,9 @@ impl Layout {
     pub fn stored_side(self) -> Side {
         match self {
             Layout::Supernodal => Side::Lower,
-            Layout::Auto | Layout::AutoComplex | Layout::Simplicial => Side::Upper,
+            Layout::Auto | Layout::AutoComplex | Layout::AutoNewton | Layout::Simplicial => {
+                Side::Upper
+            }
         }
     }
 }
@@ -207,6 +219,23 @@ impl<T: Scalar> SparseFactor<T> {
         self.mem = MemBuffer::new(StackReq::EMPTY);
         self.allocated = false;
         self.state = State::None;
+    }
+
+    /// The triangle its numeric factorizations read as it is: the lower one for a supernodal
+    /// factor, the upper one for a simplicial one (faer copies the other into it on every
+    /// factorization). An automatic [`Layout`] settles which at the analysis.
+    pub fn read_side(&self) -> Side {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+            SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
+        }
+    }
+
+    /// This analysis, for matrices whose `side` triangle is stored from now on (the pattern
+    /// analyzed is the same either way: one triangle is the other's transpose).
+    pub fn given(mut self, side: Side) -> Self {
+        self.side = side;
+        self
     }
 
     /// The number of entries the factor stores (its fill, with a supernodal layout's zeros).
@@ -821,6 +850,43 @@ impl<T: Scalar> Assembly<T> {
         Assembly { matrix, slots }
     }
 
+    /// The same real symmetric matrix stored as the other triangle (the transpose of the stored
+    /// one), each entry's slot moved with it, so that [`Assembly::fill`] sums the same values
+    /// in the same order. A counting sort by row, O(nnz): cheaper than assembling again.
+    pub fn transposed(self) -> Self {
+        assert!(
+            T::IS_REAL,
+            "Assembly::transposed: real symmetric matrices only"
+        );
+        let m = self.matrix.symbolic();
+        let (dim, col_ptr, row_idx) = (m.ncols(), m.col_ptr(), m.row_idx());
+        let nnz = row_idx.len();
+        let mut new_ptr = vec![0usize; dim + 1];
+        for &r in row_idx {
+            new_ptr[r + 1] += 1;
+        }
+        for c in 0..dim {
+            new_ptr[c + 1] += new_ptr[c];
+        }
+        // Column c of the stored triangle becomes row c of the other; visiting the columns in
+        // order leaves each new column's rows sorted.
+        let mut next = new_ptr.clone();
+        let mut new_row = vec![0usize; nnz];
+        let mut moved = vec![0usize; nnz];
+        for c in 0..dim {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[k];
+                new_row[next[r]] = c;
+                moved[k] = next[r];
+                next[r] += 1;
+            }
+        }
+        let slots = self.slots.iter().map(|&s| moved[s]).collect();
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, new_ptr, None, new_row);
+        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
+        Assembly { matrix, slots }
+    }
+
     /// Rewrites the values: entry k of the pattern receives `values[k]` (summed over duplicates).
     pub fn fill(&mut self, values: &[T]) {
         assert_eq!(values.len(), self.slots.len());
@@ -913,7 +979,8 @@ mod tests {
 
     /// `Assembly::blocked` against `Assembly::permuted` given the expanded entries and order:
     /// the same pattern and the same slot for every entry, on random block patterns (sizes 0 to
-    /// 6, repeated pairs, every diagonal or not) in random orders, both triangles.
+    /// 6, repeated pairs, every diagonal or not) in random orders, both triangles; and
+    /// `Assembly::transposed` of the upper one against the lower one.
     #[test]
     fn blocked_matches_the_entrywise_assembly() {
         let mut rng = crate::linalg::rng::Rng::new(17);
@@ -958,6 +1025,13 @@ mod tests {
                 assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} {side:?}");
                 assert_eq!(by_entry.slots, by_block.slots, "trial {trial} {side:?}");
             }
+            // The upper triangle transposed is the lower one assembled entry by entry.
+            let lower = Assembly::<f64>::permuted(offset[nb], &entries, &expanded, Side::Lower);
+            let moved = Assembly::<f64>::blocked(&sizes, &blocks, &order, Side::Upper).transposed();
+            let (p, q) = (lower.matrix.symbolic(), moved.matrix.symbolic());
+            assert_eq!(p.col_ptr(), q.col_ptr(), "trial {trial} transposed");
+            assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} transposed");
+            assert_eq!(lower.slots, moved.slots, "trial {trial} transposed");
         }
     }
 

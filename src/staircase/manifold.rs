@@ -6,6 +6,7 @@
 
 use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor, block_coordinates};
 use crate::problem::rank_p::{Point, Problem, dot};
+use faer::Side;
 use faer::c64;
 
 /// An orthonormal real basis of the tangent space at each row (as complex p-vectors):
@@ -260,15 +261,19 @@ impl NewtonSystem {
         let blocks: Vec<(usize, usize)> = problem.upper.iter().map(|&(k, l, _)| (k, l)).collect();
         let row_order = problem.row_order();
         let order = block_coordinates(&row_order, &offsets);
-        // Supernodal: measured 1.6x (M3500c) to 2x (city10000) faster whole-process than faer's
-        // own choice (simplicial) on these patterns. Assembled directly in its order and triangle.
-        let layout = Layout::Supernodal;
-        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, layout.stored_side());
+        // The layout from the factor's flop ratio, with the crossover measured on these systems
+        // ([`Layout::AutoNewton`]); assembled directly in its order and in the triangle its
+        // factorizations read (a supernodal factor's is the lower one: the upper transposed).
+        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, Side::Upper);
         let factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
-            layout.stored_side(),
-            layout,
+            Side::Upper,
+            Layout::AutoNewton,
         );
+        let (assembly, factor) = match factor.read_side() {
+            Side::Upper => (assembly, factor),
+            Side::Lower => (assembly.transposed(), factor.given(Side::Lower)),
+        };
         NewtonSystem {
             assembly,
             values: Vec::new(),
