@@ -454,6 +454,7 @@ pub fn optimize_to(
         stop_tolerance,
         None,
         &mut None,
+        &|| None,
     )
 }
 
@@ -474,7 +475,9 @@ fn system_for<'a>(
 /// most work_limit / (one factorization's multiply-adds) steps, and never fewer than
 /// [`StaircaseOptions::min_descent_steps`] (nor more than `options.max_iterations`); with the
 /// Newton system of an earlier call at the same rank in `system` (at 10⁶ poses its analysis
-/// takes longer than three factorizations).
+/// takes longer than three factorizations), or else the one `arriving` hands over when the
+/// first step needs it (built on a second core: the start's projection, cost, gradient and
+/// multipliers are computed while it is being built).
 #[allow(clippy::too_many_arguments)]
 fn optimize_in(
     problem: &Problem,
@@ -485,6 +488,7 @@ fn optimize_in(
     stop_tolerance: f64,
     work_limit: Option<f64>,
     system: &mut Option<NewtonSystem>,
+    arriving: &dyn Fn() -> Option<NewtonSystem>,
 ) -> Local {
     let mut project = |x: &mut Point| {
         if let Some(positions) = positions.as_deref_mut() {
@@ -498,6 +502,9 @@ fn optimize_in(
     let cost = problem.cost(&start);
     let mut at = Iterate::new(problem, start, cost);
     let damping = at.basis.damping(problem);
+    if system.is_none() {
+        *system = arriving();
+    }
     let system = system_for(system, problem, &at.basis);
     let step_work = system.factor.multiply_adds();
     let max_iterations = match work_limit {
@@ -763,6 +770,7 @@ fn solve_from_start(
     let descend = |start: Point,
                    positions: Option<&mut OptimalPositions>,
                    rank_one: &mut Option<NewtonSystem>,
+                   arriving: &dyn Fn() -> Option<NewtonSystem>,
                    observer: &mut dyn FnMut(&Iteration)| {
         crate::progress::phase("Newton");
         // The first descent gets the budget but its reserve (below), and min_descent_steps at
@@ -776,11 +784,14 @@ fn solve_from_start(
             1e-12,
             Some(0.75 * options.staircase_budget),
             rank_one,
+            arriving,
         )
     };
     // The rank-1 Newton system's assembly and analysis, and the certificate's, depend on the
     // pattern alone: with a second core they are built there while this thread computes the
-    // start, factors L and descends (city10000: 15 ms and 11 ms of a 250 ms solve). Each is
+    // start, factors L and descends (city10000: 15 ms and 11 ms of a 250 ms solve); the descent
+    // takes the Newton system when its first step needs it (after the start's projection, cost,
+    // gradient and multipliers: on kitti_02 this thread waited up to 4 ms for it). Each is
     // computed as it would be here, so the results are the same bits on one core or two. The
     // certificate's factor allocates its values at its first factorization, after Newton's gave
     // its memory back.
@@ -794,8 +805,9 @@ fn solve_from_start(
         |system| {
             let start = start();
             let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
-            let mut rank_one = system();
-            let local = start.map(|s| descend(s, positions.as_mut(), &mut rank_one, observer));
+            let mut rank_one = None;
+            let local =
+                start.map(|s| descend(s, positions.as_mut(), &mut rank_one, system, observer));
             (positions, local, rank_one)
         },
     );
