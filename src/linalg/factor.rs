@@ -26,8 +26,8 @@ pub struct NotFactorable;
 
 /// How a factor is stored and computed: faer's choice by flop count, column by column
 /// (simplicial: scalar code, fine for any [`Scalar`]), or by dense blocks (supernodal: faster on
-/// the Newton systems from a few thousand poses up, but its dense kernels need SIMD support of the
-/// scalar type, which double-double lacks).
+/// factors with many operations per entry, such as the Newton systems of denser or 3D graphs, but
+/// its dense kernels need SIMD support of the scalar type, which double-double lacks).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layout {
     Auto,
