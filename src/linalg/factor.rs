@@ -852,7 +852,8 @@ impl<T: Scalar> Assembly<T> {
 
     /// The same real symmetric matrix stored as the other triangle (the transpose of the stored
     /// one), each entry's slot moved with it, so that [`Assembly::fill`] sums the same values
-    /// in the same order. A counting sort by row, O(nnz): cheaper than assembling again.
+    /// in the same order. The stored entries bucketed by their rows ([`column_buckets`]),
+    /// O(nnz): cheaper than assembling again.
     pub fn transposed(self) -> Self {
         assert!(
             T::IS_REAL,
@@ -861,25 +862,17 @@ impl<T: Scalar> Assembly<T> {
         let m = self.matrix.symbolic();
         let (dim, col_ptr, row_idx) = (m.ncols(), m.col_ptr(), m.row_idx());
         let nnz = row_idx.len();
-        let mut new_ptr = vec![0usize; dim + 1];
-        for &r in row_idx {
-            new_ptr[r + 1] += 1;
-        }
+        // Row r of the stored triangle becomes column r of the other; the buckets keep the
+        // stored (column-major) order, so each new column's rows come sorted.
+        let (new_ptr, order) = column_buckets(dim, row_idx.iter().copied());
+        let mut column = vec![0usize; nnz];
         for c in 0..dim {
-            new_ptr[c + 1] += new_ptr[c];
+            column[col_ptr[c]..col_ptr[c + 1]].fill(c);
         }
-        // Column c of the stored triangle becomes row c of the other; visiting the columns in
-        // order leaves each new column's rows sorted.
-        let mut next = new_ptr.clone();
-        let mut new_row = vec![0usize; nnz];
+        let new_row: Vec<usize> = order.iter().map(|&k| column[k]).collect();
         let mut moved = vec![0usize; nnz];
-        for c in 0..dim {
-            for k in col_ptr[c]..col_ptr[c + 1] {
-                let r = row_idx[k];
-                new_row[next[r]] = c;
-                moved[k] = next[r];
-                next[r] += 1;
-            }
+        for (at, &k) in order.iter().enumerate() {
+            moved[k] = at;
         }
         let slots = self.slots.iter().map(|&s| moved[s]).collect();
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, new_ptr, None, new_row);
