@@ -130,20 +130,26 @@ const CEILING: f64 = 1.0 / 16.0;
 
 /// The shift ladder: μ from `start` down by 64 (by 4096 while 100 or more pivots are negative:
 /// the count of eigenvalues below μ falls like a power of μ, Weyl's law) while more than k are
-/// negative, at most 8 rungs and not below 4·`assembly`. Where the rounding hides the gap at the
-/// first rung with at most k: up while no rung above was tried (a first shift guessed below the
-/// rounding level, [`first_shift`]), to twice the error bound that rung showed (by 2 to 64),
-/// then three log-scale bisections between the hidden rung and the rung above. `inertia(μ)`
-/// factors B − μI: `Some(Some((negative pivots, backward error)))`, `Some(None)` on a zero pivot,
-/// `None` when the matrix cannot be formed (then no shift will do). `assembly` bounds the
-/// difference between the stored B and the exact one.
+/// negative, at most 8 rungs and not below 4·`assembly`. Neither the start nor a step down goes
+/// below 4·`error_floor` ([`crate::linalg::factor::ldlt_error_floor`]: a rung below it is hidden
+/// by the rounding whatever its inertia, one at 4·`error_floor` is likely to show the gap),
+/// unless a rung there had more than k below. (At 10⁶ poses the first shift, 1e-12, lay under a
+/// floor of 1.3e-11: its factorization, a third of the certificate's, showed nothing.) Where the
+/// rounding hides the gap at the first rung with at most k: up while no rung above was tried (a
+/// first shift guessed below the rounding level, [`first_shift`]), to twice the error bound that
+/// rung showed (by 2 to 64), then three log-scale bisections between the hidden rung and the rung
+/// above. `inertia(μ)` factors B − μI: `Some(Some((negative pivots, backward error)))`,
+/// `Some(None)` on a zero pivot, `None` when the matrix cannot be formed (then no shift will do).
+/// `assembly` bounds the difference between the stored B and the exact one.
 pub fn isolate(
     k: usize,
     start: f64,
     assembly: f64,
+    error_floor: f64,
     mut inertia: impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
-    let mut mu = start;
+    let low = 4.0 * error_floor;
+    let mut mu = if start < low { low.min(CEILING) } else { start };
     // The lowest shift with more than k negative pivots, and the last with at most k where the
     // rounding hid the gap.
     let mut above: Option<f64> = None;
@@ -177,7 +183,8 @@ pub fn isolate(
                     return bisect(k, low, Some(mu), assembly, &mut inertia);
                 }
                 above = Some(mu);
-                mu /= if many { 4096.0 } else { 64.0 };
+                let next = mu / if many { 4096.0 } else { 64.0 };
+                mu = if mu > low { next.max(low) } else { next };
             }
         }
         if mu < 4.0 * assembly {
@@ -263,6 +270,7 @@ fn bisect(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::factor::ldlt_error_floor;
 
     /// A diagonal "matrix" with known eigenvalues: the inertia of B − μI counts those below μ.
     fn ladder(eigenvalues: &[f64], k: usize, error: f64) -> (Ladder, Vec<f64>) {
@@ -270,8 +278,19 @@ mod tests {
     }
 
     fn ladder_from(start: f64, eigenvalues: &[f64], k: usize, error: f64) -> (Ladder, Vec<f64>) {
+        ladder_above(start, 0.0, eigenvalues, k, error)
+    }
+
+    /// The ladder with an a-priori rounding floor.
+    fn ladder_above(
+        start: f64,
+        floor: f64,
+        eigenvalues: &[f64],
+        k: usize,
+        error: f64,
+    ) -> (Ladder, Vec<f64>) {
         let mut shifts = Vec::new();
-        let l = isolate(k, start, 0.0, |mu| {
+        let l = isolate(k, start, 0.0, floor, |mu| {
             shifts.push(mu);
             Some(Some((
                 eigenvalues.iter().filter(|&&e| e < mu).count(),
@@ -335,6 +354,35 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn no_rung_below_four_times_the_error_floor_unless_one_there_saw_too_many() {
+        // The 10⁶-pose case: a first shift of 1e-12 under a floor of 1.3e-11 (error 3.3e-11)
+        // would be hidden; the ladder starts at 5.2e-11 and proves θ = 1.9e-11 there.
+        let eig = [0.0, 2e-10, 1.0];
+        let (l, shifts) = ladder_above(1e-12, 1.3e-11, &eig, 1, 3.3e-11);
+        assert_eq!(shifts, vec![4.0 * 1.3e-11]);
+        assert!(matches!(l, Ladder::Found { mu, .. } if mu == 4.0 * 1.3e-11));
+        // A step down by 64 from 1e-8 would land at 1.6e-10, under 4·floor = 4e-10: it stops
+        // there, where only the one at zero lies below.
+        let eig = [0.0, 5e-10, 5e-9, 1.0];
+        let (_, shifts) = ladder_above(1e-8, 1e-10, &eig, 1, 2e-10);
+        assert_eq!(shifts, vec![1e-8, 4e-10]);
+        // Too many below 4·floor too: down by 64 from there as before (hidden: error 2e-10), then
+        // bisection between.
+        let eig = [0.0, 1e-10, 1.0];
+        let (_, shifts) = ladder_above(1e-8, 1e-10, &eig, 1, 2e-10);
+        assert_eq!(&shifts[..3], &[1e-8, 4e-10, 4e-10 / 64.0]);
+        // The floor: γ_{2k+8}·(row sum) at its largest, here the row with k = 6 (40u against 10u
+        // and 36u).
+        let floor = ldlt_error_floor(&[1, 6, 2], &[1.0, 2.0, 3.0]);
+        assert_eq!(floor, crate::linalg::roundoff::gamma(20) * 2.0);
+        // A floor above the ceiling: the start is capped at 1/16.
+        assert_eq!(
+            ladder_above(1e-3, 1.0, &[0.0, 1.0], 1, 0.0).1[0],
+            1.0 / 16.0
+        );
     }
 
     #[test]

@@ -1,5 +1,5 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::{c64, cx128, fx128};
@@ -34,6 +34,9 @@ use std::sync::Arc;
 pub struct SparseCertifier {
     assembly: Assembly<c64>,
     factor: SparseFactor<c64>,
+    /// The factor's row counts ([`SparseFactor::row_counts`]), for the ladder's
+    /// [`ldlt_error_floor`].
+    row_counts: Vec<u32>,
     /// Position of each diagonal entry of W̃ in the upper-triangle entry list.
     diagonal: Vec<usize>,
     /// W̃'s upper-triangle entries, shared with the problem.
@@ -95,6 +98,7 @@ impl SparseCertifier {
         }
         SparseCertifier {
             assembly,
+            row_counts: factor.row_counts(),
             factor,
             diagonal,
             entries: Arc::clone(upper),
@@ -264,7 +268,10 @@ impl SparseCertifier {
     fn gap_by_inertia(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
         let start = self.shifts.start(1, self.diagonal.len() / 2);
-        let ladder = isolate(1, start, assembly, |mu| self.inertia_at(lambda, scale, mu));
+        let floor = self.error_floor(lambda, scale);
+        let ladder = isolate(1, start, assembly, floor, |mu| {
+            self.inertia_at(lambda, scale, mu)
+        });
         self.shifts.remember(&ladder);
         match ladder {
             Ladder::Found {
@@ -274,6 +281,26 @@ impl SparseCertifier {
             Ladder::Hidden { mu } => self.precise_gap(lambda, scale, mu, assembly),
             Ladder::Failed => None,
         }
+    }
+
+    /// [`ldlt_error_floor`] of B = D W̃(λ) D: the row sums of |B| from W̃'s upper triangle.
+    fn error_floor(&self, lambda: &[f64], scale: &[f64]) -> f64 {
+        let rot0 = self.diagonal.len() - lambda.len();
+        let mut sums = vec![0.0; self.diagonal.len()];
+        for &(r, c, v) in self.entries.iter() {
+            let s = scale[r] * scale[c];
+            if r == c {
+                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                sums[r] += ((v.re - l) * s).abs();
+            } else {
+                // |v| to an ulp or two without hypot's cost: the floor is a guide, not a bound the
+                // proof relies on.
+                let a = v.norm_sqr().sqrt() * s;
+                sums[r] += a;
+                sums[c] += a;
+            }
+        }
+        ldlt_error_floor(&self.row_counts, &sums)
     }
 
     /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):

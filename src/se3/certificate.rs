@@ -34,7 +34,7 @@
 
 use super::problem::{Point3, Problem3};
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
 
 /// What [`Certifier3::certify`] proved.
@@ -59,6 +59,9 @@ pub struct Certifier3 {
     diagonal: Vec<usize>,
     assembly: Assembly<f64>,
     factor: SparseFactor<f64>,
+    /// The factor's row counts by row of S ([`SparseFactor::row_counts`] in the elimination
+    /// order, carried back), for the ladder's [`ldlt_error_floor`].
+    row_counts: Vec<u32>,
     values: Vec<f64>,
     /// Row sums of D|Q|D's assembly bound, before scaling (per entry abs kept in `entries`).
     max_degree: usize,
@@ -102,12 +105,17 @@ impl Certifier3 {
             layout.stored_side(),
             layout,
         );
+        let mut row_counts = vec![0; dim];
+        for (&count, &row) in factor.row_counts().iter().zip(&order) {
+            row_counts[row] = count;
+        }
         Certifier3 {
             entries,
             lambda_at,
             diagonal,
             assembly,
             factor,
+            row_counts,
             values: Vec::new(),
             max_degree: problem.max_degree,
             shifts: ShiftMemory::default(),
@@ -166,6 +174,19 @@ impl Certifier3 {
             }
         }
         2.0 * gamma(6 * self.max_degree + 12) * rows.iter().fold(0.0f64, |m, &v| m.max(v))
+    }
+
+    /// [`ldlt_error_floor`] of B = D S D: the row sums of |B| from S's upper triangle.
+    fn error_floor(&self, lambda: &[[[f64; 3]; 3]], scale: &[f64]) -> f64 {
+        let mut sums = vec![0.0; scale.len()];
+        for (k, &(r, c, q, _)) in self.entries.iter().enumerate() {
+            let b = ((q - self.lambda(k, lambda)) * scale[r] * scale[c]).abs();
+            sums[r] += b;
+            if r != c {
+                sums[c] += b;
+            }
+        }
+        ldlt_error_floor(&self.row_counts, &sums)
     }
 
     /// Fills D(S + ηP)D − μI and returns the ∞-norm bound of the rounding of forming it.
@@ -228,7 +249,8 @@ impl Certifier3 {
     ) -> Option<(f64, usize)> {
         let assembly = self.assembly_error(scale);
         let start = self.shifts.start(k, n1 + 1);
-        let ladder = isolate(k, start, assembly, |mu| {
+        let floor = self.error_floor(lambda, scale);
+        let ladder = isolate(k, start, assembly, floor, |mu| {
             Some(self.inertia_at(lambda, scale, mu, n1))
         });
         self.shifts.remember(&ladder);
