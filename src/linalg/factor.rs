@@ -869,32 +869,48 @@ impl<T: Scalar> Assembly<T> {
 
     /// The same real symmetric matrix stored as the other triangle (the transpose of the stored
     /// one), each entry's slot moved with it, so that [`Assembly::fill`] sums the same values
-    /// in the same order. The stored entries bucketed by their rows ([`column_buckets`]),
-    /// O(nnz): cheaper than assembling again.
+    /// in the same order: a counting sort of the stored entries by row, O(nnz), cheaper than
+    /// assembling again. One pass over the stored columns places each entry in its row's bucket
+    /// (the new column) and records where it went; the slots and the value array are reused. At
+    /// 10⁶ planar poses (14·10⁶ entries) its fresh arrays were most of its time in page faults.
     pub fn transposed(self) -> Self {
         assert!(
             T::IS_REAL,
             "Assembly::transposed: real symmetric matrices only"
         );
-        let m = self.matrix.symbolic();
-        let (dim, col_ptr, row_idx) = (m.ncols(), m.col_ptr(), m.row_idx());
+        let Assembly { matrix, mut slots } = self;
+        let (symbolic, values) = matrix.into_parts();
+        let (dim, col_ptr, row_idx) = (symbolic.ncols(), symbolic.col_ptr(), symbolic.row_idx());
         let nnz = row_idx.len();
-        // Row r of the stored triangle becomes column r of the other; the buckets keep the
-        // stored (column-major) order, so each new column's rows come sorted.
-        let (new_ptr, order) = column_buckets(dim, row_idx.iter().copied());
-        let mut column = vec![0usize; nnz];
+        let mut new_ptr = vec![0usize; dim + 1];
+        for &r in row_idx {
+            new_ptr[r + 1] += 1;
+        }
         for c in 0..dim {
-            column[col_ptr[c]..col_ptr[c + 1]].fill(c);
+            new_ptr[c + 1] += new_ptr[c];
         }
-        let new_row: Vec<usize> = order.iter().map(|&k| column[k]).collect();
+        // Row r of the stored triangle becomes column r of the other; columns visited in order,
+        // so each new column's rows come sorted.
+        let mut next = new_ptr.clone();
+        let mut new_row = vec![0usize; nnz];
         let mut moved = vec![0usize; nnz];
-        for (at, &k) in order.iter().enumerate() {
-            moved[k] = at;
+        for c in 0..dim {
+            for p in col_ptr[c]..col_ptr[c + 1] {
+                let at = &mut next[row_idx[p]];
+                new_row[*at] = c;
+                moved[p] = *at;
+                *at += 1;
+            }
         }
-        let slots = self.slots.iter().map(|&s| moved[s]).collect();
+        drop(symbolic);
+        for s in &mut slots {
+            *s = moved[*s];
+        }
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, new_ptr, None, new_row);
-        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
-        Assembly { matrix, slots }
+        Assembly {
+            matrix: SparseColMat::new(symbolic, values),
+            slots,
+        }
     }
 
     /// Rewrites the values: entry k of the pattern receives `values[k]` (summed over duplicates).
