@@ -148,8 +148,12 @@ pub fn isolate(
     error_floor: f64,
     mut inertia: impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
-    let low = 4.0 * error_floor;
-    let mut mu = if start < low { low.min(CEILING) } else { start };
+    let lowest = 4.0 * error_floor;
+    let mut mu = if start < lowest {
+        lowest.min(CEILING)
+    } else {
+        start
+    };
     // The lowest shift with more than k negative pivots, and the last with at most k where the
     // rounding hid the gap.
     let mut above: Option<f64> = None;
@@ -184,7 +188,7 @@ pub fn isolate(
                 }
                 above = Some(mu);
                 let next = mu / if many { 4096.0 } else { 64.0 };
-                mu = if mu > low { next.max(low) } else { next };
+                mu = if mu > lowest { next.max(lowest) } else { next };
             }
         }
         if mu < 4.0 * assembly {
