@@ -219,8 +219,8 @@ impl SparseCertifier {
             return None;
         }
         self.isolated = false;
-        let (_, scale) = self.scaling(lambda, 0.0, true)?;
-        let gap = self.gap(problem, lambda, &scale)?;
+        let (a, scale) = self.scaling(lambda, 0.0, true)?;
+        let gap = self.gap(problem, lambda, &a, &scale)?;
         self.isolated = matches!(gap, Gap::Isolated(_));
         // Isolated: exactly one eigenvalue at zero is proven (the SZEP). Definite proves λ strictly
         // feasible, which says nothing of how many eigenvalues lie within λ's accuracy of zero.
@@ -252,23 +252,29 @@ impl SparseCertifier {
     /// ([`ShiftMemory::start`]), else at a shift for the graph's size, and the ladder
     /// ([`isolate`]) moves it until at most one pivot is negative (at most 8 factorizations,
     /// usually one).
-    fn gap(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
+    fn gap(&mut self, problem: &Problem, lambda: &[f64], a: &[f64], scale: &[f64]) -> Option<Gap> {
         let key: Vec<u64> = lambda.iter().map(|l| l.to_bits()).collect();
         if let Some((last, gap)) = &self.last_gap
             && *last == key
         {
             return *gap;
         }
-        let gap = self.gap_by_inertia(problem, lambda, scale);
+        let gap = self.gap_by_inertia(problem, lambda, a, scale);
         self.last_gap = Some((key, gap));
         gap
     }
 
-    /// [`Self::gap`] without the memo: the shift ladder.
-    fn gap_by_inertia(&mut self, problem: &Problem, lambda: &[f64], scale: &[f64]) -> Option<Gap> {
+    /// [`Self::gap`] without the memo: the shift ladder (`a`, `scale` from [`Self::scaling`]).
+    fn gap_by_inertia(
+        &mut self,
+        problem: &Problem,
+        lambda: &[f64],
+        a: &[f64],
+        scale: &[f64],
+    ) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
         let start = self.shifts.start(1, self.diagonal.len() / 2);
-        let floor = self.error_floor(lambda, scale);
+        let floor = ldlt_error_floor(&self.row_counts, &self.abs_row_sums(a, scale));
         let ladder = isolate(1, start, assembly, floor, |mu| {
             self.inertia_at(lambda, scale, mu)
         });
@@ -281,26 +287,6 @@ impl SparseCertifier {
             Ladder::Hidden { mu } => self.precise_gap(lambda, scale, mu, assembly),
             Ladder::Failed => None,
         }
-    }
-
-    /// [`ldlt_error_floor`] of B = D W̃(λ) D: the row sums of |B| from W̃'s upper triangle.
-    fn error_floor(&self, lambda: &[f64], scale: &[f64]) -> f64 {
-        let rot0 = self.diagonal.len() - lambda.len();
-        let mut sums = vec![0.0; self.diagonal.len()];
-        for &(r, c, v) in self.entries.iter() {
-            let s = scale[r] * scale[c];
-            if r == c {
-                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                sums[r] += ((v.re - l) * s).abs();
-            } else {
-                // |v| to an ulp or two without hypot's cost: the floor is a guide, not a bound the
-                // proof relies on.
-                let a = v.norm_sqr().sqrt() * s;
-                sums[r] += a;
-                sums[c] += a;
-            }
-        }
-        ldlt_error_floor(&self.row_counts, &sums)
     }
 
     /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):
@@ -468,8 +454,17 @@ impl SparseCertifier {
     /// α = dim·u·‖B‖_∞ for the equilibrated B = D(W̃(λ) + ηP)D (exactly summed row by row;
     /// ‖B‖₂ ≤ ‖B‖_∞ for Hermitian B): the backward-error model of the factorization.
     fn alpha(&self, a: &[f64], scale: &[f64]) -> f64 {
-        let dim = self.diagonal.len();
-        let mut rows: Vec<f64> = (0..dim).map(|k| a[k] * scale[k] * scale[k]).collect();
+        let norm = self
+            .abs_row_sums(a, scale)
+            .iter()
+            .fold(0.0f64, |m, &v| m.max(v));
+        self.diagonal.len() as f64 * (f64::EPSILON / 2.0) * norm
+    }
+
+    /// The row sums of |B| for B = D(W̃(λ) + ηP)D, the diagonal's moduli `a` and `scale` from
+    /// [`Self::scaling`]: for [`Self::alpha`] and the ladder's [`ldlt_error_floor`].
+    fn abs_row_sums(&self, a: &[f64], scale: &[f64]) -> Vec<f64> {
+        let mut rows: Vec<f64> = (0..a.len()).map(|k| a[k] * scale[k] * scale[k]).collect();
         for &(r, c, v) in self.entries.iter() {
             if r != c {
                 let e = v.norm() * scale[r] * scale[c];
@@ -477,8 +472,7 @@ impl SparseCertifier {
                 rows[c] += e;
             }
         }
-        let norm = rows.iter().fold(0.0f64, |m, &v| m.max(v));
-        dim as f64 * (f64::EPSILON / 2.0) * norm
+        rows
     }
 
     /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Whether it succeeded.

@@ -882,13 +882,7 @@ impl<T: Scalar> Assembly<T> {
         let (symbolic, values) = matrix.into_parts();
         let (dim, col_ptr, row_idx) = (symbolic.ncols(), symbolic.col_ptr(), symbolic.row_idx());
         let nnz = row_idx.len();
-        let mut new_ptr = vec![0usize; dim + 1];
-        for &r in row_idx {
-            new_ptr[r + 1] += 1;
-        }
-        for c in 0..dim {
-            new_ptr[c + 1] += new_ptr[c];
-        }
+        let new_ptr = bucket_starts(dim, row_idx.iter().copied());
         // Row r of the stored triangle becomes column r of the other; columns visited in order,
         // so each new column's rows come sorted.
         let mut next = new_ptr.clone();
@@ -938,6 +932,19 @@ pub fn ldlt_error_floor(row_counts: &[u32], row_sums: &[f64]) -> f64 {
     })
 }
 
+/// Where each column's bucket starts for entries in columns `cols` (counts, then their prefix
+/// sums): `start[c]..start[c + 1]`, `start[dim]` entries in all.
+fn bucket_starts(dim: usize, cols: impl Iterator<Item = usize>) -> Vec<usize> {
+    let mut start = vec![0usize; dim + 1];
+    for c in cols {
+        start[c + 1] += 1;
+    }
+    for c in 0..dim {
+        start[c + 1] += start[c];
+    }
+    start
+}
+
 /// The entries 0..len of a sparse matrix bucketed by their columns `cols` (a counting sort,
 /// O(len + dim)): `order[start[c]..start[c + 1]]` are the entries of column c, in their own
 /// order. Returns `(start, order)`.
@@ -945,13 +952,7 @@ pub fn column_buckets(
     dim: usize,
     cols: impl Iterator<Item = usize> + Clone,
 ) -> (Vec<usize>, Vec<usize>) {
-    let mut start = vec![0usize; dim + 1];
-    for c in cols.clone() {
-        start[c + 1] += 1;
-    }
-    for c in 0..dim {
-        start[c + 1] += start[c];
-    }
+    let start = bucket_starts(dim, cols.clone());
     let mut next = start.clone();
     let mut order = vec![0usize; start[dim]];
     for (k, c) in cols.enumerate() {

@@ -176,17 +176,28 @@ impl Certifier3 {
         2.0 * gamma(6 * self.max_degree + 12) * rows.iter().fold(0.0f64, |m, &v| m.max(v))
     }
 
-    /// [`ldlt_error_floor`] of B = D S D: the row sums of |B| from S's upper triangle.
-    fn error_floor(&self, lambda: &[[[f64; 3]; 3]], scale: &[f64]) -> f64 {
-        let mut sums = vec![0.0; scale.len()];
+    /// The row sums of |D(S + ηP)D|: for the ladder's [`ldlt_error_floor`] (η = 0) and the
+    /// shifted factorization's α.
+    fn abs_row_sums(
+        &self,
+        lambda: &[[[f64; 3]; 3]],
+        scale: &[f64],
+        eta: f64,
+        n1: usize,
+    ) -> Vec<f64> {
+        let mut rows = vec![0.0; scale.len()];
         for (k, &(r, c, q, _)) in self.entries.iter().enumerate() {
-            let b = ((q - self.lambda(k, lambda)) * scale[r] * scale[c]).abs();
-            sums[r] += b;
+            let mut v = (q - self.lambda(k, lambda)).abs();
+            if r == c && self.shifted(r, n1) {
+                v += eta.abs();
+            }
+            let v = v * scale[r] * scale[c];
+            rows[r] += v;
             if r != c {
-                sums[c] += b;
+                rows[c] += v;
             }
         }
-        ldlt_error_floor(&self.row_counts, &sums)
+        rows
     }
 
     /// Fills D(S + ηP)D − μI and returns the ∞-norm bound of the rounding of forming it.
@@ -249,7 +260,7 @@ impl Certifier3 {
     ) -> Option<(f64, usize)> {
         let assembly = self.assembly_error(scale);
         let start = self.shifts.start(k, n1 + 1);
-        let floor = self.error_floor(lambda, scale);
+        let floor = ldlt_error_floor(&self.row_counts, &self.abs_row_sums(lambda, scale, 0.0, n1));
         let ladder = isolate(k, start, assembly, floor, |mu| {
             Some(self.inertia_at(lambda, scale, mu, n1))
         });
@@ -373,19 +384,10 @@ impl Certifier3 {
         };
         let dim = scale.len();
         // α: the backward error of LLᵀ (dim·u·‖B‖_∞), the assembly's and the forming's.
-        let mut rows = vec![0.0; dim];
-        for (k, &(r, c, q, _)) in self.entries.iter().enumerate() {
-            let mut v = (q - self.lambda(k, lambda)).abs();
-            if r == c && self.shifted(r, n1) {
-                v += eta.abs();
-            }
-            let v = v * scale[r] * scale[c];
-            rows[r] += v;
-            if r != c {
-                rows[c] += v;
-            }
-        }
-        let norm = rows.iter().fold(0.0f64, |m, &v| m.max(v));
+        let norm = self
+            .abs_row_sums(lambda, &scale, eta, n1)
+            .iter()
+            .fold(0.0f64, |m, &v| m.max(v));
         let alpha0 = dim as f64 * U * norm + self.assembly_error(&scale);
         let form = self.fill(lambda, &scale, eta, 0.0, n1);
         let alpha = (alpha0 + form) * (1.0 + 8.0 * U);
