@@ -475,21 +475,23 @@ pub fn optimize(
     options: &LocalOptions,
     report: &mut dyn FnMut(Step3),
 ) -> Local3 {
-    optimize_with(problem, translations, x, options, report, None)
+    optimize_with(problem, translations, x, options, report, &|| None)
 }
 
-/// As [`optimize`], with the Newton system of `x`'s rank when one was built ahead.
+/// As [`optimize`], with the Newton system of `x`'s rank when one was built ahead: `system()`
+/// hands it over (waiting for it if it is still being built), asked once the start's
+/// translations are projected; `None` builds it here.
 pub fn optimize_with(
     problem: &Problem3,
     translations: &mut Translations,
     mut x: Point3,
     options: &LocalOptions,
     report: &mut dyn FnMut(Step3),
-    system: Option<System>,
+    system: &dyn Fn() -> Option<System>,
 ) -> Local3 {
     let p = x.p;
     translations.project(problem, &mut x);
-    let mut sys = system
+    let mut sys = system()
         .filter(|s| s.p == p)
         .unwrap_or_else(|| System::new(problem, p));
     let total_weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
