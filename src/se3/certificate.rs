@@ -93,7 +93,7 @@ impl Certifier3 {
             }
         }
         let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
-        let order = group_ordering(&problem.pose_rank, &problem.row_pose());
+        let order = group_ordering(problem.pose_rank(), &problem.row_pose());
         // Assembled in its elimination order, so that no factorization copies it into that order.
         // Supernodal: S's 3x3 blocks per pose make dense blocks pay off where faer's flop rule
         // chose simplicial; whole process, 11 interleaved pairs new/old, 0.62 (tinyGrid3D) to
@@ -429,7 +429,7 @@ impl Certifier3 {
         let pattern: Vec<(usize, usize)> = self.entries.iter().map(|e| (e.0, e.1)).collect();
         let mut assembly = Assembly::<f64>::new(dim, &pattern);
         assembly.fill(&self.values);
-        let order = group_ordering(&problem.pose_rank, &problem.row_pose());
+        let order = group_ordering(problem.pose_rank(), &problem.row_pose());
         let mut factor =
             SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order, Layout::Simplicial);
         factor.ldlt(assembly.matrix.as_ref()).ok()?;

@@ -178,7 +178,7 @@ impl System {
             }
         }
         // Poses in the fill-reducing order, each pose's coordinates together.
-        let poses = group_ordering(&problem.pose_rank, &(0..n).collect::<Vec<_>>());
+        let poses = group_ordering(problem.pose_rank(), &(0..n).collect::<Vec<_>>());
         let order = block_coordinates(&poses, &offset);
         // Supernodal, assembled directly in its elimination order and triangle (faer then factors
         // it without a permuted copy). The planar systems choose by flop ratio

@@ -123,8 +123,8 @@ pub struct Problem3 {
     pub abs_blocks: Vec<[[f64; 4]; 4]>,
     /// The largest number of edges at one pose.
     pub max_degree: usize,
-    /// A fill-reducing rank of each pose ([`crate::linalg::factor::pose_rank`]).
-    pub pose_rank: Vec<usize>,
+    /// A fill-reducing rank of each pose ([`Problem3::pose_rank`]), computed at its first use.
+    pose_rank: std::sync::OnceLock<Vec<usize>>,
 }
 
 /// A point of the rank-p form: N rows of p entries, row-major.
@@ -269,7 +269,6 @@ impl Problem3 {
                 }
             }
         }
-        let pose_rank = crate::linalg::factor::pose_rank(n, terms.iter().map(|t| (t.i, t.j)));
         Problem3 {
             n,
             anchor,
@@ -278,8 +277,18 @@ impl Problem3 {
             blocks,
             abs_blocks,
             max_degree: degree.iter().copied().max().unwrap_or(0),
-            pose_rank,
+            pose_rank: std::sync::OnceLock::new(),
         }
+    }
+
+    /// A fill-reducing rank of each pose ([`crate::linalg::factor::pose_rank`]), for the Newton
+    /// systems and the certificate. Computed at the first call, on the thread that makes it: the
+    /// helper that builds them ahead when there is a second core (its ordering, up to a nested
+    /// dissection, then runs beside the chordal estimate).
+    pub fn pose_rank(&self) -> &[usize] {
+        self.pose_rank.get_or_init(|| {
+            crate::linalg::factor::pose_rank(self.n, self.terms.iter().map(|t| (t.i, t.j)))
+        })
     }
 
     /// N = 4n − 1.

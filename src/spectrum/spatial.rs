@@ -259,7 +259,7 @@ pub fn sparse_spectra3(
             (r, c, v)
         })
         .collect();
-    let order = group_ordering(&problem.pose_rank, &problem.row_pose());
+    let order = group_ordering(problem.pose_rank(), &problem.row_pose());
     let options = SubspaceOptions::default();
     let q_form = |z: &Mat<c64>| edge_form3(problem, None, z);
     let s_form = |z: &Mat<c64>| edge_form3(problem, Some(lambda), z);
