@@ -974,13 +974,7 @@ pub fn column_buckets(
 /// per entry of the graph, and kept only where its count ([`elimination_work`]) is at most
 /// [`DISSECTION_GAIN`] times AMD's.
 pub fn pose_rank(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Vec<usize> {
-    let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
-    entries.extend(
-        edges
-            .filter(|(i, j)| i != j)
-            .map(|(i, j)| (i.min(j), i.max(j))),
-    );
-    let graph = Assembly::<f64>::new(n, &entries);
+    let graph = pose_graph(n, edges);
     let pattern = graph.matrix.symbolic();
     let Some((mut rank, count)) = amd_rank(pattern) else {
         return (0..n).collect();
@@ -992,6 +986,18 @@ pub fn pose_rank(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Vec<u
         rank = nd;
     }
     rank
+}
+
+/// The pattern of the pose graph's matrix (`n` nodes, `edges`): its upper triangle, the diagonal
+/// included, each edge once.
+fn pose_graph(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Assembly<f64> {
+    let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
+    entries.extend(
+        edges
+            .filter(|(i, j)| i != j)
+            .map(|(i, j)| (i.min(j), i.max(j))),
+    );
+    Assembly::<f64>::new(n, &entries)
 }
 
 /// faer's AMD order of a graph (`pattern`: the upper triangle, diagonal included) as a rank of
@@ -1034,19 +1040,15 @@ pub const DISSECTION_GAIN: f64 = 0.8;
 /// 32-bit indices.
 pub fn nested_dissection(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<Vec<usize>> {
     let n = pattern.ncols();
-    // The adjacency lists of both triangles, without the diagonal (METIS's CSR graph).
-    let mut degree = vec![0usize; n + 1];
-    for j in 0..n {
-        for i in pattern.row_idx_of_col(j) {
-            if i != j {
-                degree[i + 1] += 1;
-                degree[j + 1] += 1;
-            }
-        }
-    }
-    for k in 0..n {
-        degree[k + 1] += degree[k];
-    }
+    // The adjacency lists of both triangles, without the diagonal (METIS's CSR graph): each
+    // off-diagonal entry (i, j) in the lists of i and of j.
+    let ends = (0..n).flat_map(|j| {
+        pattern
+            .row_idx_of_col(j)
+            .filter(move |&i| i != j)
+            .flat_map(move |i| [i, j])
+    });
+    let degree = bucket_starts(n, ends);
     let mut next = degree.clone();
     let mut adjacency = vec![0 as metis_sys::idx_t; degree[n]];
     for j in 0..n {
@@ -1152,13 +1154,6 @@ mod tests {
     use faer::c64;
     use faer::sparse::Triplet;
 
-    /// The upper pattern (diagonal included) of a graph on n nodes.
-    fn graph_pattern(n: usize, edges: &[(usize, usize)]) -> Assembly<f64> {
-        let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
-        entries.extend(edges.iter().map(|&(i, j)| (i.min(j), i.max(j))));
-        Assembly::<f64>::new(n, &entries)
-    }
-
     /// Σ_j c_j² by eliminating the nodes one by one in the order of `rank` on a dense adjacency
     /// matrix: each node's later neighbours become a clique (the fill), c_j = 1 + their count.
     fn dense_elimination_work(n: usize, edges: &[(usize, usize)], rank: &[usize]) -> f64 {
@@ -1245,7 +1240,7 @@ mod tests {
             for k in (1..n).rev() {
                 rank.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
             }
-            let graph = graph_pattern(n, &edges);
+            let graph = pose_graph(n, edges.iter().copied());
             let work = elimination_work(graph.matrix.symbolic(), &rank);
             assert_eq!(
                 work,
@@ -1262,7 +1257,7 @@ mod tests {
     fn nested_dissection_is_kept_where_it_is_cheaper() {
         let n = 12 * 12 * 12;
         let edges = grid_edges(12, 12, 12);
-        let graph = graph_pattern(n, &edges);
+        let graph = pose_graph(n, edges.iter().copied());
         let pattern = graph.matrix.symbolic();
         let nd = nested_dissection(pattern).expect("METIS orders a grid");
         let mut seen = vec![false; n];
@@ -1283,7 +1278,7 @@ mod tests {
         );
         assert_eq!(pose_rank(n, edges.iter().copied()), nd);
         let path: Vec<(usize, usize)> = (1..50).map(|k| (k - 1, k)).collect();
-        let (amd, _) = amd_rank(graph_pattern(50, &path).matrix.symbolic()).unwrap();
+        let (amd, _) = amd_rank(pose_graph(50, path.iter().copied()).matrix.symbolic()).unwrap();
         assert_eq!(pose_rank(50, path.iter().copied()), amd);
     }
 
