@@ -13,7 +13,9 @@
 //! ```
 
 use pgo::io::{self, ReadOptions};
-use pgo::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering, pose_rank};
+use pgo::linalg::factor::{
+    Assembly, Layout, PLANAR_BLOCK_WORK, SparseFactor, group_ordering, pose_rank,
+};
 use pgo::problem::weights::{Weights, edge_weights};
 use pgo::staircase::{StaircaseOptions, solve_anchored};
 use std::time::Instant;
@@ -74,6 +76,7 @@ fn main() {
                         .iter()
                         .map(|o| (o.pose, problem.n + o.landmark)),
                 ),
+                PLANAR_BLOCK_WORK,
             ));
         });
         let order = group_ordering(&problem.pose_rank, &problem.row_poses());

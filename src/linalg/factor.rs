@@ -970,16 +970,22 @@ pub fn column_buckets(
 /// AMD is greedy (the least fill at each step) and the better order on the sparse planar
 /// graphs; on denser ones nested dissection (George 1973; Karypis and Kumar 1998, METIS) can find
 /// orders with far fewer operations: sphere_bignoise's pose graph, Σ_j c_j² 2.66e6 against AMD's
-/// 4.02e6. It is tried only where AMD's order costs at least [`DISSECTION_WORTH`] multiply-adds
-/// per entry of the graph, and kept only where its count ([`elimination_work`]) is at most
-/// [`DISSECTION_GAIN`] times AMD's.
-pub fn pose_rank(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Vec<usize> {
+/// 4.02e6. It is tried only where AMD's order costs the factorizations at least
+/// [`DISSECTION_WORTH`] multiply-adds per entry of the graph, and kept only where its count
+/// ([`elimination_work`]) is at most [`DISSECTION_GAIN`] times AMD's. `block_work` converts the
+/// pose graph's multiply-adds into the factorizations' real ones: b³ for b real rows per pose
+/// ([`SPATIAL_BLOCK_WORK`]), 4b³ for b complex ones ([`PLANAR_BLOCK_WORK`]).
+pub fn pose_rank(
+    n: usize,
+    edges: impl Iterator<Item = (usize, usize)>,
+    block_work: f64,
+) -> Vec<usize> {
     let graph = pose_graph(n, edges);
     let pattern = graph.matrix.symbolic();
     let Some((mut rank, count)) = amd_rank(pattern) else {
         return (0..n).collect();
     };
-    if count >= DISSECTION_WORTH * pattern.compute_nnz() as f64
+    if count * block_work >= DISSECTION_WORTH * pattern.compute_nnz() as f64
         && let Some(nd) = nested_dissection(pattern)
         && elimination_work(pattern, &nd) <= DISSECTION_GAIN * elimination_work(pattern, &rank)
     {
@@ -1022,12 +1028,25 @@ fn amd_rank(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, 
     Some((perm_inv, count.n_mult_subs_ldl))
 }
 
-/// AMD's multiply-adds per entry of the pose graph from which [`nested_dissection`] is tried:
-/// METIS takes 7 to 34 ms on public graphs of 2 200 to 10 000 poses, which a factorization must
-/// outweigh. Among the public files the denser 3D graphs reach it (sphere2500 119,
-/// sphere_bignoise 182, torus3D 203); cubicle (92), parking-garage (6) and every planar file
-/// (0.5 to 52, city10000 the largest) keep AMD without the partitioning's cost.
-pub const DISSECTION_WORTH: f64 = 100.0;
+/// The factorizations' real multiply-adds (AMD's count on the pose graph times the caller's
+/// `block_work`) per entry of the pose graph from which [`nested_dissection`] is tried: METIS
+/// takes 7 to 34 ms on public graphs of 2 200 to 10 000 poses, which the factorizations must
+/// outweigh. In AMD's count per entry (times 6³ = 216 for the 3D Newton systems), the denser 3D
+/// graphs reach it (sphere2500 119, sphere_bignoise 182, torus3D 203); cubicle (92) and
+/// parking-garage (6) keep AMD without the partitioning's cost. The planar factorizations, with
+/// 2 complex rows per pose (32 real multiply-adds per pose-graph one), would need 675: every
+/// planar file has 0.5 to 52 (city10000 the largest), and the generated 10⁶-pose Manhattan
+/// world of `scripts/bench-scale` 103, where METIS took 5.5 s for an order that halved Σ c_j²
+/// but saved the factorizations about 1 s (whole process 45.2 s against 41.0 with AMD; at
+/// 10⁵ poses, 71, forcing it cost 21%).
+pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
+
+/// `block_work` of [`pose_rank`] for the 3D problems: the Newton systems' 6 real rows per pose.
+pub const SPATIAL_BLOCK_WORK: f64 = 216.0;
+
+/// `block_work` of [`pose_rank`] for the planar problems: the certificate's 2 complex rows per
+/// pose (a complex multiply-add is 4 real ones); the Newton systems' 3 real rows give 27.
+pub const PLANAR_BLOCK_WORK: f64 = 32.0;
 
 /// The largest ratio of nested dissection's [`elimination_work`] to AMD's at which its order is
 /// kept. faer's supernodal kernels run its orders at fewer multiply-adds per second (measured,
@@ -1252,7 +1271,9 @@ mod tests {
 
     /// METIS's order is a permutation, the same on every call; on a 12 × 12 × 12 grid (AMD's
     /// count 100 times the graph's entries and more) it costs less than AMD's by more than
-    /// DISSECTION_GAIN, and `pose_rank` takes it; on a path (no fill either way) AMD is kept.
+    /// DISSECTION_GAIN, and `pose_rank` takes it for 3D problems, but not for planar ones, whose
+    /// smaller blocks would need AMD's count at 675 times the entries; on a path (no fill either
+    /// way) AMD is kept.
     #[test]
     fn nested_dissection_is_kept_where_it_is_cheaper() {
         let n = 12 * 12 * 12;
@@ -1267,7 +1288,8 @@ mod tests {
         }
         assert_eq!(nested_dissection(pattern), Some(nd.clone()));
         let (amd, count) = amd_rank(pattern).unwrap();
-        assert!(count >= DISSECTION_WORTH * pattern.compute_nnz() as f64);
+        let per_entry = count / pattern.compute_nnz() as f64;
+        assert!((100.0..675.0).contains(&per_entry), "{per_entry}");
         let (nd_work, amd_work) = (
             elimination_work(pattern, &nd),
             elimination_work(pattern, &amd),
@@ -1276,10 +1298,11 @@ mod tests {
             nd_work <= DISSECTION_GAIN * amd_work,
             "{nd_work} {amd_work}"
         );
-        assert_eq!(pose_rank(n, edges.iter().copied()), nd);
+        assert_eq!(pose_rank(n, edges.iter().copied(), SPATIAL_BLOCK_WORK), nd);
+        assert_eq!(pose_rank(n, edges.iter().copied(), PLANAR_BLOCK_WORK), amd);
         let path: Vec<(usize, usize)> = (1..50).map(|k| (k - 1, k)).collect();
         let (amd, _) = amd_rank(pose_graph(50, path.iter().copied()).matrix.symbolic()).unwrap();
-        assert_eq!(pose_rank(50, path.iter().copied()), amd);
+        assert_eq!(pose_rank(50, path.iter().copied(), SPATIAL_BLOCK_WORK), amd);
     }
 
     /// `Assembly::blocked` against `Assembly::permuted` given the expanded entries and order:

@@ -94,6 +94,7 @@ impl Problem {
                         .iter()
                         .map(|e| (e.i, e.j))
                         .chain(marks.observations.iter().map(|o| (o.pose, n + o.landmark))),
+                    crate::linalg::factor::PLANAR_BLOCK_WORK,
                 )
             },
         );

@@ -287,7 +287,11 @@ impl Problem3 {
     /// dissection, then runs beside the chordal estimate).
     pub fn pose_rank(&self) -> &[usize] {
         self.pose_rank.get_or_init(|| {
-            crate::linalg::factor::pose_rank(self.n, self.terms.iter().map(|t| (t.i, t.j)))
+            crate::linalg::factor::pose_rank(
+                self.n,
+                self.terms.iter().map(|t| (t.i, t.j)),
+                crate::linalg::factor::SPATIAL_BLOCK_WORK,
+            )
         })
     }
 
