@@ -243,6 +243,36 @@ impl SparseCertifier {
         })
     }
 
+    /// Whether Temple's bound at `x` is expected to leave more than `slack` between f(x) and the
+    /// lower bound: the bound that a gap θ as large as the ladder's first shift would give (the
+    /// gap proven at a rung μ is μ − ‖E‖, and the ladder steps up from its first rung only
+    /// where the rounding hides it). No factorization and no proof: a forecast by which the
+    /// caller polishes an estimate before its first certificate rather than after (at 10⁶
+    /// poses Newton's cost-based stopping rule leaves a residual of which ‖r‖²/θ exceeds the
+    /// tolerance, and the certificate at that point was a whole LDLᴴ spent for nothing).
+    pub fn expects_shortfall(
+        &self,
+        problem: &Problem,
+        x: &Point,
+        lambda: &[f64],
+        eta_max: f64,
+        slack: f64,
+    ) -> bool {
+        if x.p != 1 || x.x.len() != self.diagonal.len() {
+            return false;
+        }
+        let Some((_, scale)) = self.scaling(lambda, 0.0, true) else {
+            return false;
+        };
+        let theta = self.shifts.start(1, self.diagonal.len() / 2);
+        let enclosure = problem.enclose(x);
+        let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
+        let f = problem.cost(x);
+        rayleigh
+            .smallest_eta(theta, eta_max)
+            .is_none_or(|eta| f - dual_value(lambda, eta) > slack)
+    }
+
     /// θ ≤ λ₂(D W̃(λ) D): the inertia of an LDLᴴ of B = D W̃(λ) D − μI. With exactly one negative
     /// pivot and none zero, B + E has one negative eigenvalue, E the LDLᴴ's backward error
     /// ([`SparseFactor::ldlt_backward_error`]) plus the rounding of B's diagonal plus the

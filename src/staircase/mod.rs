@@ -812,11 +812,6 @@ fn solve_from_start(
         },
     );
     let mut local = local?;
-    // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
-    // the certificate's.
-    if let Some(system) = rank_one.as_mut() {
-        system.factor.release();
-    }
     let mut iterations = local.iterations;
     let Some(mut certifier) = certifier else {
         let (work, limited) = (local.iterations as f64 * local.step_work, local.limited);
@@ -836,6 +831,27 @@ fn solve_from_start(
     let reach = |certifier: &SparseCertifier, l: &Local| {
         eta_max(l.cost).max(64.0 * certifier.resolution(&l.lambda, &l.point.x, 1))
     };
+    // Where even a gap as large as the ladder's first shift leaves Temple's bound short of the
+    // tolerance, the residual of Newton's cost-based stopping rule is polished away before the
+    // certificate's first factorization instead of after it (below).
+    if certifier.expects_shortfall(
+        problem,
+        &local.point,
+        &local.lambda,
+        reach(&certifier, &local),
+        options.tolerance * local.cost.max(1.0),
+    ) {
+        let before = local.iterations;
+        crate::progress::phase("Newton polish, rank 1 (the residual is too large for the bound)");
+        local = polish_in(problem, local, &mut rank_one);
+        iterations += local.iterations - before;
+        newton_work += (local.iterations - before) as f64 * rank_1_step;
+    }
+    // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
+    // the certificate's.
+    if let Some(system) = rank_one.as_mut() {
+        system.factor.release();
+    }
     // Rank 1 first: the common case. A proof within 64x the certificate's resolution means the
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
     // negative eigenvalue of W̃(λ): a saddle, or a relaxation that is not exact) calls for the
