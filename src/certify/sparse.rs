@@ -1,5 +1,5 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
+use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::{c64, cx128, fx128};
@@ -317,6 +317,12 @@ impl SparseCertifier {
             Ladder::Hidden { mu } => self.precise_gap(lambda, scale, mu, assembly),
             Ladder::Failed => None,
         }
+    }
+
+    /// Takes the values of a real factor that is no longer needed (Newton's) as the room of its
+    /// factor's ([`SparseFactor::reuse`]).
+    pub fn reuse(&mut self, values: Vec<f64>) {
+        self.factor.reuse(c64::room_of(values));
     }
 
     /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):

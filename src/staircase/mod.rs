@@ -848,9 +848,9 @@ fn solve_from_start(
         newton_work += (local.iterations - before) as f64 * rank_1_step;
     }
     // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
-    // the certificate's.
+    // the certificate's, pages mapped.
     if let Some(system) = rank_one.as_mut() {
-        system.factor.release();
+        certifier.reuse(system.factor.take_values());
     }
     // Rank 1 first: the common case. A proof within 64x the certificate's resolution means the
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
