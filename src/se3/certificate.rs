@@ -273,6 +273,13 @@ impl Certifier3 {
         }
     }
 
+    /// Takes the values of a factor that is no longer needed (the Newton descent's, in
+    /// [`super::local::Local3::room`]) as the room of this one's ([`SparseFactor::reuse`]): their
+    /// pages are mapped already.
+    pub fn reuse(&mut self, room: Vec<f64>) {
+        self.factor.reuse(room);
+    }
+
     /// Proves S + ηP ⪰ 0 at the multipliers of `x` for the smallest η it finds ≤ `eta_max`
     /// (deflating the k = x.p columns of x), else by the shifted factorization. `None` if no
     /// η ≤ `eta_max` is proven.

@@ -34,6 +34,8 @@ pub struct Local3 {
     pub converged: bool,
     /// Real multiply-adds of the Newton factorizations.
     pub work: f64,
+    /// The Newton factor's values, for a factor that follows to reuse ([`SparseFactor::reuse`]).
+    pub room: Vec<f64>,
 }
 
 /// QX by Q's blocks (no rounding bounds; for the solver's own use).
@@ -516,6 +518,7 @@ pub fn optimize_with(
             iterations: 0,
             converged: true,
             work,
+            room: Vec::new(),
         };
     }
     let mut fresh = true;
@@ -632,6 +635,7 @@ pub fn optimize_with(
         iterations,
         converged,
         work,
+        room: sys.factor.take_values(),
     }
 }
 

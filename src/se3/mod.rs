@@ -188,11 +188,13 @@ pub fn solve_graph3_from(
     // analysis); the descent takes the Newton system once its start is projected (torus3D: the
     // system's 30 ms beside the chordal estimate's instead of before it). Each is computed as it
     // would be here: the same bits on one core or two.
-    let ((mut translations, first), mut certifier) = crate::linalg::parallel::ahead(
+    let ((mut translations, mut first), mut certifier) = crate::linalg::parallel::ahead(
         || System::new(&problem, 3),
         || Certifier3::new(&problem),
         |system| descend(system, report),
     );
+    // The Newton factor's memory, pages mapped, for the certificate's factor.
+    certifier.reuse(std::mem::take(&mut first.room));
     let mut iterations = first.iterations;
     let mut work = 0.0;
     crate::progress::phase("certificate");
