@@ -514,3 +514,56 @@ fn a_second_certificate_at_the_same_multipliers_repeats_no_factorization() {
         }
     }
 }
+
+#[test]
+fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
+    // SparseCertifier::expects_shortfall forecasts, without a factorization, that Temple's bound
+    // at a point will miss a slack: it evaluates the bound with a gap as large as the ladder's
+    // first shift, and a proven gap is smaller (μ − ‖E‖ at the rung where the ladder stops). So
+    // where it forecasts a shortfall, the certificate itself (a fresh certifier, the same η
+    // reach) must fall short too. Checked at M3500's certified optimum (no shortfall forecast,
+    // the bound within the slack) and at points moved off it by growing rotations, with
+    // positions kept and λ from each point's own first-order conditions; some of them must be
+    // forecast short, so that the check is not vacuous.
+    use pgo::certify::SparseCertifier;
+    use pgo::staircase::solve_anchored;
+    let path = common::datasets_dir().join("M3500.g2o");
+    let g = pgo::io::read_path(path.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .0;
+    let w = edge_weights(&g, Weights::Isotropic).unwrap();
+    let (s, anchored) = solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+    let problem = &anchored.problem;
+    let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+    // The solver's own slack and η reach: the tolerance (relative) and its share per pose.
+    let tolerance = StaircaseOptions::default().tolerance;
+    let slack = tolerance * s.cost;
+    let reach = tolerance * s.cost / problem.n as f64;
+    let certifier = fresh();
+    assert!(!certifier.expects_shortfall(problem, &s.point, &s.lambda, reach, slack));
+    let at_optimum = fresh()
+        .certify_rank_one(problem, &s.point, &s.lambda, reach)
+        .expect("M3500's optimum is certified");
+    assert!(s.cost - at_optimum.lower_bound <= slack);
+    let rot0 = problem.positions();
+    let mut forecast = 0;
+    for size in [1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2] {
+        let mut x = s.point.clone();
+        for (k, r) in x.x[rot0..].iter_mut().enumerate() {
+            let angle = size * (((k * 7919) % 101) as f64 / 50.0 - 1.0);
+            *r *= faer::c64::new(angle.cos(), angle.sin());
+        }
+        let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
+        if certifier.expects_shortfall(problem, &x, &lambda, reach, slack) {
+            forecast += 1;
+            let cost = problem.cost(&x);
+            let proof = fresh().certify_rank_one(problem, &x, &lambda, reach);
+            assert!(
+                proof.is_none_or(|b| cost - b.lower_bound > slack),
+                "moved by {size}: forecast short, proven within the slack: {proof:?}"
+            );
+        }
+    }
+    assert!(forecast > 0, "no moved point was forecast short");
+    eprintln!("{forecast} of 8 moved points forecast short");
+}
