@@ -540,7 +540,7 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     let slack = tolerance * s.cost;
     let reach = tolerance * s.cost / problem.n as f64;
     let certifier = fresh();
-    assert!(!certifier.expects_shortfall(problem, &s.point, &s.lambda, reach, slack));
+    assert!(!certifier.expects_shortfall(problem, &s.point, s.cost, &s.lambda, reach, slack));
     let at_optimum = fresh()
         .certify_rank_one(problem, &s.point, &s.lambda, reach)
         .expect("M3500's optimum is certified");
@@ -554,9 +554,9 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
             *r *= faer::c64::new(angle.cos(), angle.sin());
         }
         let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
-        if certifier.expects_shortfall(problem, &x, &lambda, reach, slack) {
+        let cost = problem.cost(&x);
+        if certifier.expects_shortfall(problem, &x, cost, &lambda, reach, slack) {
             forecast += 1;
-            let cost = problem.cost(&x);
             let proof = fresh().certify_rank_one(problem, &x, &lambda, reach);
             assert!(
                 proof.is_none_or(|b| cost - b.lower_bound > slack),

@@ -243,8 +243,8 @@ impl SparseCertifier {
         })
     }
 
-    /// Whether Temple's bound at `x` is expected to leave more than `slack` between f(x) and the
-    /// lower bound: the bound that a gap θ as large as the ladder's first shift would give (the
+    /// Whether Temple's bound at `x` (whose f is `cost`) is expected to leave more than `slack`
+    /// between f(x) and the lower bound: the bound that a gap θ as large as the ladder's first shift would give (the
     /// gap proven at a rung μ is μ − ‖E‖, and the ladder steps up from its first rung only
     /// where the rounding hides it). No factorization and no proof: a forecast by which the
     /// caller polishes an estimate before its first certificate rather than after (at 10⁶
@@ -254,6 +254,7 @@ impl SparseCertifier {
         &self,
         problem: &Problem,
         x: &Point,
+        cost: f64,
         lambda: &[f64],
         eta_max: f64,
         slack: f64,
@@ -267,10 +268,9 @@ impl SparseCertifier {
         let theta = self.shifts.start(1, self.diagonal.len() / 2);
         let enclosure = problem.enclose(x);
         let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
-        let f = problem.cost(x);
         rayleigh
             .smallest_eta(theta, eta_max)
-            .is_none_or(|eta| f - dual_value(lambda, eta) > slack)
+            .is_none_or(|eta| cost - dual_value(lambda, eta) > slack)
     }
 
     /// θ ≤ λ₂(D W̃(λ) D): the inertia of an LDLᴴ of B = D W̃(λ) D − μI. With exactly one negative

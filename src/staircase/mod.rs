@@ -837,6 +837,7 @@ fn solve_from_start(
     if certifier.expects_shortfall(
         problem,
         &local.point,
+        local.cost,
         &local.lambda,
         reach(&certifier, &local),
         options.tolerance * local.cost.max(1.0),
