@@ -60,35 +60,95 @@ pub fn join<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send)
     })
 }
 
-/// `(main(ready), then())` with `first` and then `then` on a second core when [`second_core`]:
-/// `ready()` waits for `first`'s result and hands it over (once; `None` after, and `None` on one
-/// core, where `first` is not run and `main` builds what it needs itself, and `then` runs after
-/// `main`). For work that depends on a problem's pattern alone, built ahead while this thread
-/// starts and descends. A panic in `first` or `then` is resumed here.
-pub fn ahead<S: Send, C: Send, R>(
+/// A result that a second core computes ahead ([`ahead`]): [`Ready::take`] waits for it and hands
+/// it over once (`None` after, and `None` on one core, where it is not computed and the caller
+/// builds what it needs itself).
+pub struct Ready<T> {
+    receive: Option<std::sync::mpsc::Receiver<T>>,
+    taken: std::cell::Cell<bool>,
+}
+
+impl<T> Ready<T> {
+    /// Waits for the result and hands it over, the first time only.
+    pub fn take(&self) -> Option<T> {
+        if self.taken.replace(true) {
+            return None;
+        }
+        self.receive.as_ref().and_then(|r| r.recv().ok())
+    }
+}
+
+/// A task that whichever thread comes to it first computes ([`ahead`]): the second core once it
+/// has built what it builds ahead, unless this thread has claimed the task by then.
+pub struct Spare<T> {
+    claimed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    receive: Option<std::sync::mpsc::Receiver<T>>,
+}
+
+impl<T> Spare<T> {
+    /// The task's result (asked for once): computed here by `compute` if the second core has not
+    /// claimed the task, else the second core's, waited for.
+    pub fn take(&self, compute: impl FnOnce() -> T) -> T {
+        if claim(&self.claimed) {
+            return compute();
+        }
+        match self.receive.as_ref().and_then(|r| r.recv().ok()) {
+            Some(t) => t,
+            None => compute(),
+        }
+    }
+}
+
+/// Claims a [`Spare`] task; the claim that comes first wins.
+fn claim(claimed: &std::sync::atomic::AtomicBool) -> bool {
+    !claimed.swap(true, std::sync::atomic::Ordering::AcqRel)
+}
+
+/// `(main(ready, spare), then())` with `first`, then `spare_task` unless `main` has claimed it
+/// first ([`Spare`]), then `then` in that order on a second core when [`second_core`]:
+/// `ready.take()` waits for `first`'s result and hands it over ([`Ready`]); on one core neither
+/// is run, `main` builds what it needs itself and `then` runs after `main`. For work that
+/// depends on a problem's pattern alone, built ahead while this thread starts and descends. A
+/// panic on the second thread is resumed here.
+pub fn ahead<S: Send, A: Send, C: Send, R>(
     first: impl FnOnce() -> S + Send,
+    spare_task: impl FnOnce() -> A + Send,
     then: impl FnOnce() -> C + Send,
-    main: impl FnOnce(&dyn Fn() -> Option<S>) -> R,
+    main: impl FnOnce(&Ready<S>, &Spare<A>) -> R,
 ) -> (R, C) {
     if !second_core() {
-        let r = main(&|| None);
+        let ready = Ready {
+            receive: None,
+            taken: std::cell::Cell::new(false),
+        };
+        let spare = Spare {
+            claimed: Default::default(),
+            receive: None,
+        };
+        let r = main(&ready, &spare);
         return (r, then());
     }
+    let (send_spare, receive_spare) = std::sync::mpsc::channel();
+    let spare = Spare {
+        claimed: Default::default(),
+        receive: Some(receive_spare),
+    };
+    let claimed = spare.claimed.clone();
     std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::channel();
         let helper = scope.spawn(move || {
-            // A closed channel only means that `main` did not wait for `first`.
+            // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
+            if claim(&claimed) {
+                let _ = send_spare.send(spare_task());
+            }
             then()
         });
-        let taken = std::cell::Cell::new(false);
-        let r = main(&|| {
-            if taken.replace(true) {
-                None
-            } else {
-                receive.recv().ok()
-            }
-        });
+        let ready = Ready {
+            receive: Some(receive),
+            taken: std::cell::Cell::new(false),
+        };
+        let r = main(&ready, &spare);
         let c = helper
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
@@ -112,14 +172,31 @@ mod tests {
         assert_eq!(squares, 1000 * 1001 * 2001 / 6);
     }
 
-    /// `main` receives `first`'s result once (none on one core) and `then`'s comes back beside
-    /// `main`'s.
+    /// `main` receives `first`'s result once (none on one core), the spare task's result from
+    /// whichever thread computed it, and `then`'s comes back beside `main`'s.
     #[test]
-    fn ahead_hands_over_the_first_result_once() {
-        let ((got, again), then) = ahead(|| 41, || "then", |ready| (ready(), ready()));
+    fn ahead_hands_over_the_first_result_once_and_the_spare_one() {
+        let ((got, again, spare), then) = ahead(
+            || 41,
+            || "spare",
+            || "then",
+            |ready, spare| (ready.take(), ready.take(), spare.take(|| "spare")),
+        );
         assert_eq!(then, "then");
         assert_eq!(again, None);
         assert_eq!(got, second_core().then_some(41));
+        assert_eq!(spare, "spare");
+    }
+
+    /// Whichever thread claims the spare task first computes it, and only that one.
+    #[test]
+    fn the_spare_task_runs_once() {
+        let runs = std::sync::atomic::AtomicUsize::new(0);
+        let count = || {
+            runs.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        };
+        let (_, ()) = ahead(|| (), count, || (), |_, spare| spare.take(count));
+        assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 1);
     }
 
     /// A panic on the second thread reaches the caller.

@@ -169,8 +169,9 @@ pub fn solve_graph3_from(
     let local = LocalOptions {
         max_iterations: options.max_iterations,
     };
-    let descend = |system: &dyn Fn() -> Option<System>, report: &mut dyn FnMut(Step3)| {
-        let mut translations = Translations::new(&problem);
+    let descend = |translations: &dyn Fn() -> Translations,
+                   system: &dyn Fn() -> Option<System>,
+                   report: &mut dyn FnMut(Step3)| {
         let start = match start {
             Some(poses) => point_of(&problem, poses),
             None => {
@@ -178,20 +179,29 @@ pub fn solve_graph3_from(
                 chordal(&problem)
             }
         };
+        let mut translations = translations();
         crate::progress::phase("Riemannian Newton, rank 3");
         let first = optimize_with(&problem, &mut translations, start, &local, report, system);
         (translations, first)
     };
-    // The rank-3 Newton system's assembly and analysis, and the certificate's, depend on the
-    // pattern alone: with a second core they are built there while this thread starts (L's
-    // factor, the chordal estimate) and descends (parking-garage: 11 ms for the certificate's
-    // analysis); the descent takes the Newton system once its start is projected (torus3D: the
-    // system's 30 ms beside the chordal estimate's instead of before it). Each is computed as it
-    // would be here: the same bits on one core or two.
+    // The rank-3 Newton system's assembly and analysis, L's factor and the certificate's analysis
+    // depend on the problem alone: with a second core they are built there, in that order, while
+    // this thread computes the chordal estimate and descends (parking-garage: 11 ms for the
+    // certificate's analysis). The descent takes the Newton system once its start is projected
+    // (torus3D: the system's 30 ms beside the chordal estimate's instead of before it); L's
+    // factor, for that projection, is a spare task that whichever thread comes to it first
+    // computes. Each is computed as it would be here: the same bits on one core or two.
     let ((mut translations, mut first), mut certifier) = crate::linalg::parallel::ahead(
         || System::new(&problem, 3),
+        || Translations::new(&problem),
         || Certifier3::new(&problem),
-        |system| descend(system, report),
+        |system, translations| {
+            descend(
+                &|| translations.take(|| Translations::new(&problem)),
+                &|| system.take(),
+                report,
+            )
+        },
     );
     // The Newton factor's memory, pages mapped, for the certificate's factor.
     certifier.reuse(std::mem::take(&mut first.room));

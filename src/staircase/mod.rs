@@ -787,27 +787,40 @@ fn solve_from_start(
             arriving,
         )
     };
-    // The rank-1 Newton system's assembly and analysis, and the certificate's, depend on the
-    // pattern alone: with a second core they are built there while this thread computes the
-    // start, factors L and descends (city10000: 15 ms and 11 ms of a 250 ms solve); the descent
-    // takes the Newton system when its first step needs it (after the start's projection, cost,
-    // gradient and multipliers: on kitti_02 this thread waited up to 4 ms for it). Each is
-    // computed as it would be here, so the results are the same bits on one core or two. The
-    // certificate's factor allocates its values at its first factorization, after Newton's gave
-    // its memory back.
+    // The rank-1 Newton system's assembly and analysis, L's factor (the projection's) and the
+    // certificate's analysis depend on the problem alone: with a second core they are built
+    // there, in that order, while this thread computes the start and descends. The descent takes
+    // the Newton system when its first step needs it (city10000: 15 ms to build; the start's
+    // projection, cost, gradient and multipliers come first: on kitti_02 this thread waited up
+    // to 4 ms for it). L's factor is a spare task, computed by whichever thread comes to it
+    // first: the second core where the start takes long (the chordal relaxation of a landmark
+    // graph), this thread where it is quick (the rotations' alone). Then the certificate's
+    // analysis (city10000: 11 ms). Each is computed as it would be here, so the results are the
+    // same bits on one core or two. The certificate's factor allocates its values at its first
+    // factorization, after Newton's gave its memory back.
     let ((mut positions, local, mut rank_one), certifier) = crate::linalg::parallel::ahead(
         || NewtonSystem::new(problem, 1),
+        || OptimalPositions::new(problem),
         || {
             options
                 .certify
                 .then(|| SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order()))
         },
-        |system| {
+        |system, positions| {
             let start = start();
-            let mut positions = start.as_ref().and_then(|_| OptimalPositions::new(problem));
+            let mut positions = start
+                .as_ref()
+                .and_then(|_| positions.take(|| OptimalPositions::new(problem)));
             let mut rank_one = None;
-            let local =
-                start.map(|s| descend(s, positions.as_mut(), &mut rank_one, system, observer));
+            let local = start.map(|s| {
+                descend(
+                    s,
+                    positions.as_mut(),
+                    &mut rank_one,
+                    &|| system.take(),
+                    observer,
+                )
+            });
             (positions, local, rank_one)
         },
     );
