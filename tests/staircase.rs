@@ -539,7 +539,7 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     let tolerance = StaircaseOptions::default().tolerance;
     let slack = tolerance * s.cost;
     let reach = tolerance * s.cost / problem.n as f64;
-    let certifier = fresh();
+    let mut certifier = fresh();
     assert!(!certifier.expects_shortfall(problem, &s.point, s.cost, &s.lambda, reach, slack));
     let at_optimum = fresh()
         .certify_rank_one(problem, &s.point, &s.lambda, reach)
@@ -566,4 +566,49 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     }
     assert!(forecast > 0, "no moved point was forecast short");
     eprintln!("{forecast} of 8 moved points forecast short");
+}
+
+#[test]
+fn a_certificate_after_a_forecast_is_the_fresh_certificate() {
+    // SparseCertifier keeps the enclosure of f and W̃x that its forecast computed for the
+    // certificate at the same point. Whatever it keeps, each certificate must be bit for bit
+    // the one a fresh certifier gives at that point: after a forecast at the same point, and
+    // after a forecast and a certificate at another point (a stale enclosure would differ).
+    use pgo::certify::SparseCertifier;
+    use pgo::staircase::solve_anchored;
+    let path = common::datasets_dir().join("M3500.g2o");
+    let g = pgo::io::read_path(path.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .0;
+    let w = edge_weights(&g, Weights::Isotropic).unwrap();
+    let (s, anchored) = solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+    let problem = &anchored.problem;
+    let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+    let tolerance = StaircaseOptions::default().tolerance;
+    let (slack, reach) = (tolerance * s.cost, tolerance * s.cost / problem.n as f64);
+    let rot0 = problem.positions();
+    let moved = |size: f64| {
+        let mut x = s.point.clone();
+        for (k, r) in x.x[rot0..].iter_mut().enumerate() {
+            let angle = size * (((k * 7919) % 101) as f64 / 50.0 - 1.0);
+            *r *= faer::c64::new(angle.cos(), angle.sin());
+        }
+        let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
+        (problem.cost(&x), x, lambda)
+    };
+    let bits = |b: Option<pgo::certify::SparseBound>| {
+        b.map(|b| (b.eta.to_bits(), b.lower_bound.to_bits()))
+    };
+    let mut kept = fresh();
+    for size in [0.0, 1e-9, 0.0] {
+        let (cost, x, lambda) = moved(size);
+        kept.expects_shortfall(problem, &x, cost, &lambda, reach, slack);
+        let after_forecast = kept.certify_rank_one(problem, &x, &lambda, reach);
+        let alone = fresh().certify_rank_one(problem, &x, &lambda, reach);
+        assert!(
+            alone.is_some(),
+            "moved by {size}: no certificate to compare"
+        );
+        assert_eq!(bits(after_forecast), bits(alone), "moved by {size}");
+    }
 }

@@ -58,6 +58,9 @@ pub struct SparseCertifier {
     /// bound), each time a ladder of factorizations (on city10000 with 1000 false loop closures
     /// 0.7 s).
     last_gap: Option<(Vec<u64>, Option<Gap>)>,
+    /// The last rank-1 point enclosed (bit for bit) and its [`Enclosure`]: the forecast
+    /// ([`Self::expects_shortfall`]) and the certificate at the same point share it.
+    last_enclosure: Option<(Vec<u64>, Enclosure)>,
 }
 
 /// The outcome of [`SparseCertifier::certify`].
@@ -106,6 +109,7 @@ impl SparseCertifier {
             factorizations: 0,
             shifts: ShiftMemory::default(),
             last_gap: None,
+            last_enclosure: None,
             order: order.to_vec(),
             isolated: false,
             precise: None,
@@ -227,8 +231,8 @@ impl SparseCertifier {
         let (eta, theta, near_zero) = match gap {
             Gap::Definite(theta) => (0.0, theta, None),
             Gap::Isolated(theta) => {
-                let enclosure = problem.enclose(x);
-                let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
+                let enclosure = self.enclosure(problem, x);
+                let rayleigh = Rayleigh::new(enclosure, &x.x, lambda, &scale);
                 (rayleigh.smallest_eta(theta, eta_max)?, theta, Some(1))
             }
         };
@@ -251,7 +255,7 @@ impl SparseCertifier {
     /// poses Newton's cost-based stopping rule leaves a residual of which ‖r‖²/θ exceeds the
     /// tolerance, and the certificate at that point was a whole LDLᴴ spent for nothing).
     pub fn expects_shortfall(
-        &self,
+        &mut self,
         problem: &Problem,
         x: &Point,
         cost: f64,
@@ -266,11 +270,23 @@ impl SparseCertifier {
             return false;
         };
         let theta = self.shifts.start(1, self.diagonal.len() / 2);
-        let enclosure = problem.enclose(x);
-        let rayleigh = Rayleigh::new(&enclosure, &x.x, lambda, &scale);
+        let enclosure = self.enclosure(problem, x);
+        let rayleigh = Rayleigh::new(enclosure, &x.x, lambda, &scale);
         rayleigh
             .smallest_eta(theta, eta_max)
             .is_none_or(|eta| cost - dual_value(lambda, eta) > slack)
+    }
+
+    /// f(x) and W̃x enclosed ([`Problem::enclose`]), kept for the next call at the same point.
+    fn enclosure(&mut self, problem: &Problem, x: &Point) -> &Enclosure {
+        let key: Vec<u64> =
+            x.x.iter()
+                .flat_map(|z| [z.re.to_bits(), z.im.to_bits()])
+                .collect();
+        if self.last_enclosure.as_ref().is_none_or(|(k, _)| *k != key) {
+            self.last_enclosure = Some((key, problem.enclose(x)));
+        }
+        &self.last_enclosure.as_ref().expect("just set").1
     }
 
     /// θ ≤ λ₂(D W̃(λ) D): the inertia of an LDLᴴ of B = D W̃(λ) D − μI. With exactly one negative
@@ -670,6 +686,10 @@ struct Rayleigh<'a> {
     norm_error: f64,
     /// max_a D_a² over the rotation rows: ‖DPD‖₂, by which a negative η lowers λ₂ (Weyl).
     rotation_scale: f64,
+    /// Per row k, the error bound of G_k with its modulus's share, g_error_k + 4u|G_k|, and
+    /// |x_k|: the same at every η that [`Self::check`] tries.
+    g_slack: Vec<f64>,
+    x_norm: Vec<f64>,
 }
 
 impl<'a> Rayleigh<'a> {
@@ -692,7 +712,15 @@ impl<'a> Rayleigh<'a> {
             + gamma(n + 4) * s_abs
             + 2.0 * U * (enclosure.cost.abs() + s.abs());
         let rotation_scale = scale[rot0..].iter().fold(0.0f64, |m, d| m.max(d * d));
+        let g_slack = enclosure
+            .g
+            .iter()
+            .zip(&enclosure.g_error)
+            .map(|(g, e)| e + 4.0 * U * g.norm())
+            .collect();
         Rayleigh {
+            g_slack,
+            x_norm: x.iter().map(|z| z.norm()).collect(),
             enclosure,
             x,
             lambda,
@@ -749,15 +777,15 @@ impl<'a> Rayleigh<'a> {
         let rot0 = self.x.len() - self.lambda.len();
         let (mut res, mut err) = (0.0, 0.0);
         for (k, (&xk, &d)) in self.x.iter().zip(self.scale).enumerate() {
-            let g = self.enclosure.g[k];
-            let (mut r, mut e) = (g, self.enclosure.g_error[k] + 4.0 * U * g.norm());
+            let (mut r, mut e) = (self.enclosure.g[k], self.g_slack[k]);
+            let xk_norm = self.x_norm[k];
             if k >= rot0 {
                 let l = self.lambda[k - rot0];
                 r -= xk * (l - eta);
-                e += 4.0 * U * (l.abs() + eta.abs()) * xk.norm();
+                e += 4.0 * U * (l.abs() + eta.abs()) * xk_norm;
             }
             let v = r * d - xk * (sigma / d);
-            let ev = d * e + 4.0 * U * (sigma * xk.norm() / d + v.norm());
+            let ev = d * e + 4.0 * U * (sigma * xk_norm / d + v.norm());
             res += v.norm_sqr();
             err += ev * ev;
         }
