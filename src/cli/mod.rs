@@ -8,6 +8,7 @@ pub mod certify;
 pub mod common;
 pub mod convert;
 pub mod eval;
+pub mod memory;
 pub mod progress_bar;
 pub mod signals;
 pub mod simulate;
@@ -48,8 +49,10 @@ pub fn after_help(examples: &str) -> String {
 
 /// Runs a tool body: prints an error as `pgo-TOOL: message` (input errors already carry
 /// `PATH:LINE:COL`) and maps it to exit status 2; a closed pipe is status 141, silently.
-/// Interrupts are handled from here on ([`signals::install`]).
+/// Interrupts are handled from here on ([`signals::install`]), and the allocator keeps freed
+/// blocks for reuse ([`memory::tune`]).
 pub fn run_tool(name: &str, body: impl FnOnce() -> crate::Result<ExitCode>) -> ExitCode {
+    memory::tune();
     signals::install();
     match body() {
         Ok(code) => code,
