@@ -876,3 +876,53 @@ fn simulated_landmark_worlds() {
     assert_eq!(g.landmarks.ids, marks.ids);
     assert_eq!(g.landmarks.observations.len(), marks.observations.len());
 }
+
+/// A problem built relabeled (Problem::relabeled, as Anchored::at builds it: anchor 7 exchanged
+/// with pose 0) is the problem of the graph relabeled by hand, entry for entry and bit for bit,
+/// landmark observations included.
+#[test]
+fn a_relabeled_problem_is_the_problem_of_the_relabeled_graph() {
+    use pgo::problem::rank_p::Problem;
+    use pgo::problem::weights::{Weights, edge_weights};
+    use pgo::simulate::{LandmarkConfig, SimulationConfig, add_landmarks, simulate};
+    let config = SimulationConfig {
+        n: 30,
+        seed: 5,
+        loop_probability: 0.3,
+        ..Default::default()
+    };
+    let mut sim = simulate(&config);
+    let landmarks = LandmarkConfig {
+        count: 6,
+        range: 8.0,
+    };
+    add_landmarks(&mut sim, &config, &landmarks);
+    let g = sim.graph;
+    assert!(!g.landmarks.observations.is_empty());
+    let w = edge_weights(&g, Weights::Isotropic).unwrap();
+    let swap = |k: usize| match k {
+        0 => 7,
+        7 => 0,
+        k => k,
+    };
+    let mut moved = g.clone();
+    for e in &mut moved.edges {
+        (e.i, e.j) = (swap(e.i), swap(e.j));
+    }
+    for o in &mut moved.landmarks.observations {
+        o.pose = swap(o.pose);
+    }
+    let (a, b) = (Problem::relabeled(&g, &w, swap), Problem::new(&moved, &w));
+    let bits = |p: &Problem| -> Vec<(usize, usize, u64, u64)> {
+        p.upper
+            .iter()
+            .map(|&(r, c, v)| (r, c, v.re.to_bits(), v.im.to_bits()))
+            .collect()
+    };
+    assert_eq!(bits(&a), bits(&b));
+    assert_eq!(a.pose_rank, b.pose_rank);
+    let ends = |p: &Problem| -> Vec<(usize, usize, bool)> {
+        p.terms.iter().map(|t| (t.i, t.j, t.landmark)).collect()
+    };
+    assert_eq!(ends(&a), ends(&b));
+}

@@ -58,6 +58,17 @@ impl PoseGraphMatrix {
     /// W̃ of `graph` with the given weights: one per edge, then one per landmark observation
     /// ([`crate::problem::weights::edge_weights`]).
     pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
+        Self::relabeled(graph, weights, |k| k)
+    }
+
+    /// [`Self::new`] of the graph whose pose k is `graph`'s pose `label(k)`, `label` a
+    /// permutation of the poses that is its own inverse (such as one exchanging the anchor and
+    /// pose 0): built from `graph` as it is, without a relabeled copy.
+    pub fn relabeled(
+        graph: &PoseGraph,
+        weights: &[EdgeWeight],
+        label: impl Fn(usize) -> usize,
+    ) -> Self {
         let marks = &graph.landmarks;
         assert_eq!(
             weights.len(),
@@ -74,7 +85,7 @@ impl PoseGraphMatrix {
         let r = |k: usize| n - 1 + m + k;
         let terms = |out: &mut Upper| {
             for (e, w) in graph.edges.iter().zip(weights) {
-                let (i, j) = (e.i, e.j);
+                let (i, j) = (label(e.i), label(e.j));
                 let delta = translation(e.measurement);
                 out.translation(p(i), p(j), r(i), delta, w.tau, w.kappa);
                 out.diagonal(Some(r(j)), w.kappa);
@@ -86,7 +97,8 @@ impl PoseGraphMatrix {
             }
             for (o, w) in marks.observations.iter().zip(&weights[graph.edges.len()..]) {
                 let d = c64::new(o.d[0], o.d[1]);
-                out.translation(p(o.pose), lm(o.landmark), r(o.pose), d, w.tau, 0.0);
+                let i = label(o.pose);
+                out.translation(p(i), lm(o.landmark), r(i), d, w.tau, 0.0);
             }
         };
         let dim = 2 * n - 1 + m;

@@ -79,21 +79,33 @@ pub(crate) fn dot(a: &[c64], b: &[c64]) -> c64 {
 impl Problem {
     /// The problem of a connected graph with per-edge weights.
     pub fn new(graph: &PoseGraph, weights: &[EdgeWeight]) -> Self {
+        Self::relabeled(graph, weights, |k| k)
+    }
+
+    /// [`Self::new`] of the graph whose pose k is `graph`'s pose `label(k)`, `label` a
+    /// permutation of the poses that is its own inverse ([`PoseGraphMatrix::relabeled`]).
+    pub fn relabeled(
+        graph: &PoseGraph,
+        weights: &[EdgeWeight],
+        label: impl Fn(usize) -> usize + Sync,
+    ) -> Self {
         let marks = &graph.landmarks;
         let n = graph.num_poses();
         let m = marks.len();
+        let label = &label;
         // The fill-reducing order (a fifth of this function's time on city10000, in perf
         // samples) on a second core beside the assembly.
         let ((terms, matrix, upper), pose_rank) = crate::linalg::parallel::join(
-            || Self::assemble(graph, weights),
+            || Self::assemble(graph, weights, label),
             || {
                 crate::linalg::factor::pose_rank(
                     n + m,
-                    graph
-                        .edges
-                        .iter()
-                        .map(|e| (e.i, e.j))
-                        .chain(marks.observations.iter().map(|o| (o.pose, n + o.landmark))),
+                    graph.edges.iter().map(|e| (label(e.i), label(e.j))).chain(
+                        marks
+                            .observations
+                            .iter()
+                            .map(|o| (label(o.pose), n + o.landmark)),
+                    ),
                     crate::linalg::factor::PLANAR_BLOCK_WORK,
                 )
             },
@@ -112,6 +124,7 @@ impl Problem {
     fn assemble(
         graph: &PoseGraph,
         weights: &[EdgeWeight],
+        label: impl Fn(usize) -> usize,
     ) -> (Vec<EdgeTerm>, PoseGraphMatrix, Vec<(usize, usize, c64)>) {
         let marks = &graph.landmarks;
         let terms = graph
@@ -119,8 +132,8 @@ impl Problem {
             .iter()
             .zip(weights)
             .map(|(e, w)| EdgeTerm {
-                i: e.i,
-                j: e.j,
+                i: label(e.i),
+                j: label(e.j),
                 landmark: false,
                 delta: translation(e.measurement),
                 rot: rotation(e.measurement.theta),
@@ -133,7 +146,7 @@ impl Problem {
                     .iter()
                     .zip(&weights[graph.edges.len()..])
                     .map(|(o, w)| EdgeTerm {
-                        i: o.pose,
+                        i: label(o.pose),
                         j: o.landmark,
                         landmark: true,
                         delta: c64::new(o.d[0], o.d[1]),
@@ -143,7 +156,7 @@ impl Problem {
                     }),
             )
             .collect();
-        let matrix = PoseGraphMatrix::new(graph, weights);
+        let matrix = PoseGraphMatrix::relabeled(graph, weights, &label);
         let mut upper = Vec::with_capacity(matrix.upper.compute_nnz());
         upper.extend(matrix.upper_entries());
         (terms, matrix, upper)

@@ -206,21 +206,10 @@ impl Anchored {
 
     /// Anchored at pose `anchor`.
     pub fn at(graph: &PoseGraph, weights: &[EdgeWeight], anchor: usize) -> Self {
-        let problem = if anchor == 0 {
-            Problem::new(graph, weights)
-        } else {
-            let mut moved = graph.clone();
-            let swap = swapper(anchor);
-            for e in &mut moved.edges {
-                e.i = swap(e.i);
-                e.j = swap(e.j);
-            }
-            for o in &mut moved.landmarks.observations {
-                o.pose = swap(o.pose);
-            }
-            Problem::new(&moved, weights)
-        };
-        Anchored { problem, anchor }
+        Anchored {
+            problem: Problem::relabeled(graph, weights, swapper(anchor)),
+            anchor,
+        }
     }
 
     /// The rank-1 state x̃ = [ρ̃; r̃] of poses given in the graph's indexing.
