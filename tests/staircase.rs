@@ -515,6 +515,32 @@ fn a_second_certificate_at_the_same_multipliers_repeats_no_factorization() {
     }
 }
 
+/// M3500 solved by the staircase, with the anchored problem its point refers to.
+fn m3500_solved() -> (StaircaseSolution, pgo::staircase::Anchored) {
+    let path = common::datasets_dir().join("M3500.g2o");
+    let g = pgo::io::read_path(path.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .0;
+    let w = edge_weights(&g, Weights::Isotropic).unwrap();
+    pgo::staircase::solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap()
+}
+
+/// `x` with each rotation turned by an angle within ±`size` (a fixed pattern over the poses)
+/// and the positions kept: (f, the point, λ from its own first-order conditions).
+fn turned(
+    problem: &pgo::problem::rank_p::Problem,
+    x: &pgo::problem::rank_p::Point,
+    size: f64,
+) -> (f64, pgo::problem::rank_p::Point, Vec<f64>) {
+    let mut x = x.clone();
+    for (k, r) in x.x[problem.positions()..].iter_mut().enumerate() {
+        let angle = size * (((k * 7919) % 101) as f64 / 50.0 - 1.0);
+        *r *= faer::c64::new(angle.cos(), angle.sin());
+    }
+    let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
+    (problem.cost(&x), x, lambda)
+}
+
 #[test]
 fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     // SparseCertifier::expects_shortfall forecasts, without a factorization, that Temple's bound
@@ -526,13 +552,7 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     // positions kept and λ from each point's own first-order conditions; some of them must be
     // forecast short, so that the check is not vacuous.
     use pgo::certify::SparseCertifier;
-    use pgo::staircase::solve_anchored;
-    let path = common::datasets_dir().join("M3500.g2o");
-    let g = pgo::io::read_path(path.to_str().unwrap(), &Default::default())
-        .unwrap()
-        .0;
-    let w = edge_weights(&g, Weights::Isotropic).unwrap();
-    let (s, anchored) = solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+    let (s, anchored) = m3500_solved();
     let problem = &anchored.problem;
     let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
     // The solver's own slack and η reach: the tolerance (relative) and its share per pose.
@@ -545,16 +565,9 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
         .certify_rank_one(problem, &s.point, &s.lambda, reach)
         .expect("M3500's optimum is certified");
     assert!(s.cost - at_optimum.lower_bound <= slack);
-    let rot0 = problem.positions();
     let mut forecast = 0;
     for size in [1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2] {
-        let mut x = s.point.clone();
-        for (k, r) in x.x[rot0..].iter_mut().enumerate() {
-            let angle = size * (((k * 7919) % 101) as f64 / 50.0 - 1.0);
-            *r *= faer::c64::new(angle.cos(), angle.sin());
-        }
-        let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
-        let cost = problem.cost(&x);
+        let (cost, x, lambda) = turned(problem, &s.point, size);
         if certifier.expects_shortfall(problem, &x, cost, &lambda, reach, slack) {
             forecast += 1;
             let proof = fresh().certify_rank_one(problem, &x, &lambda, reach);
@@ -575,33 +588,17 @@ fn a_certificate_after_a_forecast_is_the_fresh_certificate() {
     // the one a fresh certifier gives at that point: after a forecast at the same point, and
     // after a forecast and a certificate at another point (a stale enclosure would differ).
     use pgo::certify::SparseCertifier;
-    use pgo::staircase::solve_anchored;
-    let path = common::datasets_dir().join("M3500.g2o");
-    let g = pgo::io::read_path(path.to_str().unwrap(), &Default::default())
-        .unwrap()
-        .0;
-    let w = edge_weights(&g, Weights::Isotropic).unwrap();
-    let (s, anchored) = solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+    let (s, anchored) = m3500_solved();
     let problem = &anchored.problem;
     let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
     let tolerance = StaircaseOptions::default().tolerance;
     let (slack, reach) = (tolerance * s.cost, tolerance * s.cost / problem.n as f64);
-    let rot0 = problem.positions();
-    let moved = |size: f64| {
-        let mut x = s.point.clone();
-        for (k, r) in x.x[rot0..].iter_mut().enumerate() {
-            let angle = size * (((k * 7919) % 101) as f64 / 50.0 - 1.0);
-            *r *= faer::c64::new(angle.cos(), angle.sin());
-        }
-        let lambda = problem.multipliers(&x, &problem.half_gradient(&x));
-        (problem.cost(&x), x, lambda)
-    };
     let bits = |b: Option<pgo::certify::SparseBound>| {
         b.map(|b| (b.eta.to_bits(), b.lower_bound.to_bits()))
     };
     let mut kept = fresh();
     for size in [0.0, 1e-9, 0.0] {
-        let (cost, x, lambda) = moved(size);
+        let (cost, x, lambda) = turned(problem, &s.point, size);
         kept.expects_shortfall(problem, &x, cost, &lambda, reach, slack);
         let after_forecast = kept.certify_rank_one(problem, &x, &lambda, reach);
         let alone = fresh().certify_rank_one(problem, &x, &lambda, reach);
