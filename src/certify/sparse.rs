@@ -230,11 +230,11 @@ impl SparseCertifier {
         // feasible, which says nothing of how many eigenvalues lie within λ's accuracy of zero.
         let (eta, theta, near_zero) = match gap {
             Gap::Definite(theta) => (0.0, theta, None),
-            Gap::Isolated(theta) => {
-                let enclosure = self.enclosure(problem, x);
-                let rayleigh = Rayleigh::new(enclosure, &x.x, lambda, &scale);
-                (rayleigh.smallest_eta(theta, eta_max)?, theta, Some(1))
-            }
+            Gap::Isolated(theta) => (
+                self.temple_eta(problem, x, lambda, &scale, theta, eta_max)?,
+                theta,
+                Some(1),
+            ),
         };
         if eta.is_nan() || eta > eta_max {
             return None;
@@ -270,15 +270,22 @@ impl SparseCertifier {
             return false;
         };
         let theta = self.shifts.start(1, self.diagonal.len() / 2);
-        let enclosure = self.enclosure(problem, x);
-        let rayleigh = Rayleigh::new(enclosure, &x.x, lambda, &scale);
-        rayleigh
-            .smallest_eta(theta, eta_max)
+        self.temple_eta(problem, x, lambda, &scale, theta, eta_max)
             .is_none_or(|eta| cost - dual_value(lambda, eta) > slack)
     }
 
-    /// f(x) and W̃x enclosed ([`Problem::enclose`]), kept for the next call at the same point.
-    fn enclosure(&mut self, problem: &Problem, x: &Point) -> &Enclosure {
+    /// The smallest η ≤ `eta_max` at which Temple's inequality proves λ₁(D(W̃(λ) + ηP)D) ≥ 0
+    /// given λ₂ ≥ θ ([`Rayleigh::smallest_eta`]), from the enclosure of f(x) and W̃x
+    /// ([`Problem::enclose`]), which is kept for the next call at the same point.
+    fn temple_eta(
+        &mut self,
+        problem: &Problem,
+        x: &Point,
+        lambda: &[f64],
+        scale: &[f64],
+        theta: f64,
+        eta_max: f64,
+    ) -> Option<f64> {
         let key: Vec<u64> =
             x.x.iter()
                 .flat_map(|z| [z.re.to_bits(), z.im.to_bits()])
@@ -286,7 +293,8 @@ impl SparseCertifier {
         if self.last_enclosure.as_ref().is_none_or(|(k, _)| *k != key) {
             self.last_enclosure = Some((key, problem.enclose(x)));
         }
-        &self.last_enclosure.as_ref().expect("just set").1
+        let enclosure = &self.last_enclosure.as_ref().expect("just set").1;
+        Rayleigh::new(enclosure, &x.x, lambda, scale).smallest_eta(theta, eta_max)
     }
 
     /// θ ≤ λ₂(D W̃(λ) D): the inertia of an LDLᴴ of B = D W̃(λ) D − μI. With exactly one negative

@@ -833,6 +833,7 @@ fn solve_from_start(
     let reach = |certifier: &SparseCertifier, l: &Local| {
         eta_max(l.cost).max(64.0 * certifier.resolution(&l.lambda, &l.point.x, 1))
     };
+    let mut reach_1 = reach(&certifier, &local);
     // Where even a gap as large as the ladder's first shift leaves Temple's bound short of the
     // tolerance, the residual of Newton's cost-based stopping rule is polished away before the
     // certificate's first factorization instead of after it (below).
@@ -841,7 +842,7 @@ fn solve_from_start(
         &local.point,
         local.cost,
         &local.lambda,
-        reach(&certifier, &local),
+        reach_1,
         options.tolerance * local.cost.max(1.0),
     ) {
         let before = local.iterations;
@@ -849,6 +850,7 @@ fn solve_from_start(
         local = polish_in(problem, local, &mut rank_one);
         iterations += local.iterations - before;
         newton_work += (local.iterations - before) as f64 * rank_1_step;
+        reach_1 = reach(&certifier, &local);
     }
     // The Newton system's analysis is kept for a polish; its numeric factor gives its memory to
     // the certificate's, pages mapped.
@@ -859,7 +861,6 @@ fn solve_from_start(
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
     // negative eigenvalue of W̃(λ): a saddle, or a relaxation that is not exact) calls for the
     // staircase.
-    let reach_1 = reach(&certifier, &local);
     crate::progress::phase("certificate");
     let mut first = certifier.certify_rank_one(problem, &local.point, &local.lambda, reach_1);
     if certifier.isolated
