@@ -79,7 +79,9 @@ def test_evo_reads_the_poses_of_3d_graphs(grid, fmt):
         t, q = poses[i]
         assert np.array_equal(traj.positions_xyz[k], t), i
         r = traj.poses_se3[k][:3, :3]
-        assert np.abs(r - rotation(q)).max() < 1e-15, i
+        # evo forms the matrix from the quaternion by its own sequence of products (normalized
+        # again, an outer product): entries of magnitude at most 1 agree to a few roundings.
+        assert np.abs(r - rotation(q)).max() <= 16 * np.finfo(float).eps, i
 
 
 def test_evo_ape_is_the_same_through_tum_and_kitti(grid):
