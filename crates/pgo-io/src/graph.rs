@@ -5,6 +5,8 @@
 //! frame of `i`, z ≈ x_i⁻¹ · x_j. In the paper's complex notation (eq. (2)-(4)) an edge carries
 //! Δ_ij = dx + i·dy and R_ij = e^{i·dθ}.
 
+use std::borrow::Cow;
+
 use nalgebra::{Isometry2, Matrix3, Vector2};
 
 /// A vertex id as written in the file. g2o stores ids as a signed 32-bit `int` and refuses
@@ -498,9 +500,18 @@ impl PoseGraph {
     /// graph with k components is k independent problems), with, for each, the dense indices
     /// of its poses in `self` (ascending) and of its edges (input order). FIX ids go with their
     /// component, and so do the landmarks its poses observe (with their observations, in input
-    /// order); landmarks seen by no pose are in no component.
-    pub fn components(&self) -> Vec<(PoseGraph, Vec<usize>, Vec<usize>)> {
+    /// order); landmarks seen by no pose are in no component. A graph that is one component,
+    /// every landmark observed, is its own: borrowed, not copied (at 10⁶ planar poses the copy
+    /// was 125 MB).
+    pub fn components(&self) -> Vec<(Cow<'_, PoseGraph>, Vec<usize>, Vec<usize>)> {
         let (label, count) = self.node_components();
+        if count == 1 && label.iter().all(|&c| c == 0) {
+            return vec![(
+                Cow::Borrowed(self),
+                (0..self.num_poses()).collect(),
+                (0..self.edges.len()).collect(),
+            )];
+        }
         let n = self.num_poses();
         let mut poses: Vec<Vec<usize>> = vec![Vec::new(); count];
         for (k, &c) in label[..n].iter().enumerate() {
@@ -574,7 +585,7 @@ impl PoseGraph {
                         form: self.landmarks.form,
                     },
                 };
-                (graph, members, edge_ids)
+                (Cow::Owned(graph), members, edge_ids)
             })
             .collect()
     }
@@ -882,6 +893,50 @@ mod tests {
         assert!(!g.is_balanced(1e-12));
         g.edges.pop();
         assert!(g.is_forest());
+    }
+
+    /// A connected graph is its one component as it is (borrowed: the same graph, every pose and
+    /// edge); a landmark no pose observes makes the component a copy without it.
+    #[test]
+    fn a_connected_graph_is_its_own_component() {
+        let mut g = graph(
+            3,
+            &[
+                (0, 1, Pose2::new(1.0, 0.0, 0.0)),
+                (2, 1, Pose2::new(-1.0, 0.0, 0.0)),
+            ],
+        );
+        g.landmarks = Landmarks {
+            ids: vec![7, 9],
+            positions: vec![[1.0, 2.0], [3.0, 4.0]],
+            observations: vec![Observation {
+                pose: 2,
+                landmark: 0,
+                d: [0.5, 0.5],
+                information: SymMat2::IDENTITY,
+            }],
+            ..Default::default()
+        };
+        let mut seen = g.clone();
+        seen.landmarks.observations.push(Observation {
+            landmark: 1,
+            ..seen.landmarks.observations[0]
+        });
+        let parts = seen.components();
+        assert_eq!(parts.len(), 1);
+        let (whole, poses, edges) = &parts[0];
+        assert!(matches!(whole, Cow::Borrowed(b) if std::ptr::eq(*b, &seen)));
+        assert_eq!((poses.clone(), edges.clone()), (vec![0, 1, 2], vec![0, 1]));
+        let parts = g.components();
+        assert_eq!(parts.len(), 1);
+        let (copy, poses, edges) = &parts[0];
+        assert!(matches!(copy, Cow::Owned(_)));
+        assert_eq!((poses.clone(), edges.clone()), (vec![0, 1, 2], vec![0, 1]));
+        assert_eq!(copy.landmarks.ids, vec![7]);
+        assert_eq!(
+            (copy.edges.clone(), copy.poses.clone()),
+            (g.edges.clone(), g.poses.clone())
+        );
     }
 
     #[test]
