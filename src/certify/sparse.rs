@@ -41,7 +41,6 @@ pub struct SparseCertifier {
     diagonal: Vec<usize>,
     /// W̃'s upper-triangle entries, shared with the problem.
     entries: Arc<[(usize, usize, c64)]>,
-    values: Vec<c64>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
     /// What the last successful [`Self::gap`] found, where the next one starts looking.
@@ -105,7 +104,6 @@ impl SparseCertifier {
             factor,
             diagonal,
             entries: Arc::clone(upper),
-            values: Vec::with_capacity(upper.len()),
             factorizations: 0,
             shifts: ShiftMemory::default(),
             last_gap: None,
@@ -374,25 +372,25 @@ impl SparseCertifier {
     ) -> Option<Option<(usize, f64)>> {
         let rot0 = self.diagonal.len() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
-        self.values.clear();
-        for &(r, c, v) in self.entries.iter() {
-            let s = scale[r] * scale[c];
-            self.values.push(if r == c {
-                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
-                c64::new((v.re - l) * s - mu, 0.0)
-            } else {
-                v * s
-            });
-        }
-        if self
-            .values
-            .iter()
-            .any(|v| !(v.re.is_finite() && v.im.is_finite()))
-        {
+        let mut finite = true;
+        let entries = &self.entries;
+        self.assembly.fill_with(|fill| {
+            for &(r, c, v) in entries.iter() {
+                let s = scale[r] * scale[c];
+                let value = if r == c {
+                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                    form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
+                    c64::new((v.re - l) * s - mu, 0.0)
+                } else {
+                    v * s
+                };
+                finite &= value.re.is_finite() && value.im.is_finite();
+                fill.push(value);
+            }
+        });
+        if !finite {
             return None;
         }
-        self.assembly.fill(&self.values);
         self.factorizations += 1;
         if self.factor.ldlt(self.assembly.matrix.as_ref()).is_err() {
             return Some(None);
@@ -550,16 +548,17 @@ impl SparseCertifier {
             let magnitude = w + lambda[k - rot0].abs() + eta;
             alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
-        self.values.clear();
-        for &(r, c, v) in self.entries.iter() {
-            let s = scale[r] * scale[c];
-            self.values.push(if r == c {
-                c64::new(a[r] * s - alpha, 0.0)
-            } else {
-                v * s
-            });
-        }
-        self.assembly.fill(&self.values);
+        let entries = &self.entries;
+        self.assembly.fill_with(|fill| {
+            for &(r, c, v) in entries.iter() {
+                let s = scale[r] * scale[c];
+                fill.push(if r == c {
+                    c64::new(a[r] * s - alpha, 0.0)
+                } else {
+                    v * s
+                });
+            }
+        });
         self.factorizations += 1;
         self.factor.llt(self.assembly.matrix.as_ref()).is_ok()
     }
@@ -594,16 +593,17 @@ impl SparseCertifier {
     fn fill_shifted(&mut self, lambda: &[f64], threshold: f64) {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
-        self.values.clear();
-        for &(r, c, v) in self.entries.iter() {
-            self.values.push(if r == c {
-                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                c64::new(v.re - l - threshold, 0.0)
-            } else {
-                v
-            });
-        }
-        self.assembly.fill(&self.values);
+        let entries = &self.entries;
+        self.assembly.fill_with(|fill| {
+            for &(r, c, v) in entries.iter() {
+                fill.push(if r == c {
+                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                    c64::new(v.re - l - threshold, 0.0)
+                } else {
+                    v
+                });
+            }
+        });
     }
 }
 

@@ -100,6 +100,8 @@ impl Translations {
         assembly.fill(&values);
         let mut factor = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
         let ok = factor.llt(assembly.matrix.as_ref()).is_ok();
+        // Kept to the end of the solve for solves alone.
+        factor.keep_solves_only();
         Translations {
             factor: ok.then_some(factor),
         }

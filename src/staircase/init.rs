@@ -178,12 +178,14 @@ impl OptimalPositions {
             entries.push((a, a));
             values.push(c64::new(0.0, 0.0));
         }
-        let factor = anchored_llt(
+        let mut factor = anchored_llt(
             problem.positions(),
             &problem.anchored_order(),
             &entries,
             &values,
         )?;
+        // Kept to the end of the solve for solves alone.
+        factor.keep_solves_only();
         Some(OptimalPositions { factor })
     }
 

@@ -104,8 +104,13 @@ impl TangentBasis {
 
     /// Values of H + μ·D, H = 2 Bᵀ W̃(λ) B, D = diag(2 W̃_kk) per coordinate (a scale-invariant
     /// Levenberg-Marquardt damping), in the order of [`TangentBasis::hessian_pattern`].
-    pub fn hessian_values(&self, problem: &Problem, lambda: &[f64], mu: f64, out: &mut Vec<f64>) {
-        out.clear();
+    pub fn hessian_values(
+        &self,
+        problem: &Problem,
+        lambda: &[f64],
+        mu: f64,
+        mut out: impl FnMut(f64),
+    ) {
         let positions = problem.positions();
         for &(k, l, w) in problem.upper.iter() {
             for s in 0..self.len(k) {
@@ -127,7 +132,7 @@ impl TangentBasis {
                         }
                         v += mu * 2.0 * w.re;
                     }
-                    out.push(v);
+                    out(v);
                 }
             }
         }
@@ -242,7 +247,6 @@ fn sphere_basis(y: &[c64], out: &mut Vec<c64>) {
 pub struct NewtonSystem {
     /// H + μD in the factor's elimination order, lower triangle.
     pub assembly: Assembly<f64>,
-    values: Vec<f64>,
     /// The factorization, analyzed once for the pattern (shared by every iterate of a rank).
     pub factor: SparseFactor<f64>,
     /// The elimination order: `order[new] = old` coordinate.
@@ -276,7 +280,6 @@ impl NewtonSystem {
         };
         NewtonSystem {
             assembly,
-            values: Vec::new(),
             factor,
             permuted: vec![0.0; order.len()],
             order,
@@ -285,8 +288,8 @@ impl NewtonSystem {
 
     /// Rewrites the matrix to H + μD at the point whose basis and multipliers are given.
     pub fn update(&mut self, problem: &Problem, basis: &TangentBasis, lambda: &[f64], mu: f64) {
-        basis.hessian_values(problem, lambda, mu, &mut self.values);
-        self.assembly.fill(&self.values);
+        self.assembly
+            .fill_with(|fill| basis.hessian_values(problem, lambda, mu, |v| fill.push(v)));
     }
 
     /// Numeric LLᵀ of the last [`NewtonSystem::update`]; `Err` if H + μD is not numerically
@@ -352,7 +355,7 @@ mod tests {
             let form = basis.hessian_form(&problem, &lambda, &delta);
             // The same quadratic form from the assembled upper triangle of H.
             let mut values = Vec::new();
-            basis.hessian_values(&problem, &lambda, 0.0, &mut values);
+            basis.hessian_values(&problem, &lambda, 0.0, |v| values.push(v));
             let assembled: f64 = basis
                 .hessian_pattern(&problem)
                 .iter()
