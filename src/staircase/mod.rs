@@ -877,11 +877,9 @@ fn solve_from_start(
         // The certificate's factor gives its memory to Newton's and takes it back after.
         certifier.release_factor();
         crate::progress::phase("Newton polish, rank 1 (the certificate's bound fell short)");
-        let mut rank_one = None;
-        local = polish_in(problem, local, &mut rank_one);
+        // The Newton system is built for this polish and goes with it.
+        local = polish(problem, local);
         crate::progress::phase("certificate");
-        // Its memory goes to the certificate's factor again.
-        drop(rank_one);
         if local.iterations > before {
             iterations += local.iterations - before;
             newton_work += (local.iterations - before) as f64 * rank_1_step;
