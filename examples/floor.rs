@@ -80,7 +80,11 @@ fn main() {
             ));
         });
         let order = group_ordering(&problem.pose_rank, &problem.row_poses());
-        let pattern: Vec<(usize, usize)> = problem.upper.iter().map(|&(r, c, _)| (r, c)).collect();
+        let pattern: Vec<(usize, usize)> = problem
+            .matrix
+            .upper_entries()
+            .map(|(r, c, _)| (r, c))
+            .collect();
         let dim = problem.rows();
         let mut assembly = Assembly::new(dim, &pattern);
         let analyze_s = median(&mut || {
@@ -92,9 +96,9 @@ fn main() {
         });
         let rot0 = dim - lambda.len();
         let values: Vec<faer::c64> = problem
-            .upper
-            .iter()
-            .map(|&(r, c, v)| {
+            .matrix
+            .upper_entries()
+            .map(|(r, c, v)| {
                 if r == c && r >= rot0 {
                     faer::c64::new(v.re - lambda[r - rot0], 0.0)
                 } else {

@@ -59,8 +59,7 @@ fn main() {
             }),
             median(&mut || {
                 std::hint::black_box(pgo::certify::SparseCertifier::new(
-                    problem.rows(),
-                    &problem.upper,
+                    &problem.matrix.upper,
                     &problem.row_order(),
                 ));
             }),

@@ -914,9 +914,9 @@ fn a_relabeled_problem_is_the_problem_of_the_relabeled_graph() {
     }
     let (a, b) = (Problem::relabeled(&g, &w, swap), Problem::new(&moved, &w));
     let bits = |p: &Problem| -> Vec<(usize, usize, u64, u64)> {
-        p.upper
-            .iter()
-            .map(|&(r, c, v)| (r, c, v.re.to_bits(), v.im.to_bits()))
+        p.matrix
+            .upper_entries()
+            .map(|(r, c, v)| (r, c, v.re.to_bits(), v.im.to_bits()))
             .collect()
     };
     assert_eq!(bits(&a), bits(&b));

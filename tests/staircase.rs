@@ -492,7 +492,7 @@ fn a_second_certificate_at_the_same_multipliers_repeats_no_factorization() {
         let (s, anchored) =
             solve_anchored(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
         let problem = &anchored.problem;
-        let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+        let fresh = || SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
         // The returned rank-1 estimate and its own λ, with the widest η search (the bound's).
         let eta_max = s.lambda.iter().fold(0.0f64, |m, &l| m.max(l.abs())) * 4.0 + 1.0;
         let mut once = fresh();
@@ -554,7 +554,7 @@ fn a_forecast_shortfall_is_a_certificate_that_falls_short() {
     use pgo::certify::SparseCertifier;
     let (s, anchored) = m3500_solved();
     let problem = &anchored.problem;
-    let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+    let fresh = || SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
     // The solver's own slack and η reach: the tolerance (relative) and its share per pose.
     let tolerance = StaircaseOptions::default().tolerance;
     let slack = tolerance * s.cost;
@@ -590,7 +590,7 @@ fn a_certificate_after_a_forecast_is_the_fresh_certificate() {
     use pgo::certify::SparseCertifier;
     let (s, anchored) = m3500_solved();
     let problem = &anchored.problem;
-    let fresh = || SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+    let fresh = || SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
     let tolerance = StaircaseOptions::default().tolerance;
     let (slack, reach) = (tolerance * s.cost, tolerance * s.cost / problem.n as f64);
     let bits = |b: Option<pgo::certify::SparseBound>| {

@@ -1,7 +1,9 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
 use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
+use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
+use faer::sparse::SparseColMat;
 use faer::{c64, cx128, fx128};
 use std::sync::Arc;
 
@@ -39,8 +41,8 @@ pub struct SparseCertifier {
     row_counts: Vec<u32>,
     /// Position of each diagonal entry of W̃ in the upper-triangle entry list.
     diagonal: Vec<usize>,
-    /// W̃'s upper-triangle entries, shared with the problem.
-    entries: Arc<[(usize, usize, c64)]>,
+    /// W̃'s upper triangle, shared with the problem ([`crate::problem::matrix::PoseGraphMatrix::upper`]).
+    upper: Arc<SparseColMat<usize, c64>>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
     /// What the last successful [`Self::gap`] found, where the next one starts looking.
@@ -85,15 +87,18 @@ impl SparseCertifier {
         4.0 * self.factor.multiply_adds()
     }
 
-    /// Analyzes the pattern of W̃ (upper triangle entries, diagonal included, as in
-    /// [`crate::problem::rank_p::Problem::upper`]) once, rows in a fill-reducing `order`; every later certificate reuses it.
-    pub fn new(dim: usize, upper: &Arc<[(usize, usize, c64)]>, order: &[usize]) -> Self {
-        let pattern: Vec<(usize, usize)> = upper.iter().map(|&(r, c, _)| (r, c)).collect();
+    /// Analyzes the pattern of W̃ (its upper triangle, diagonal included, as in
+    /// [`crate::problem::matrix::PoseGraphMatrix::upper`]) once, rows in a fill-reducing `order`; every later
+    /// certificate reuses it.
+    pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
+        let dim = upper.ncols();
+        let mut pattern = Vec::with_capacity(upper.val().len());
+        for_each_entry(upper, |r, c, _| pattern.push((r, c)));
         let assembly = Assembly::<c64>::new(dim, &pattern);
         let factor =
             SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::AutoComplex);
         let mut diagonal = vec![usize::MAX; dim];
-        for (k, &(r, c, _)) in upper.iter().enumerate() {
+        for (k, &(r, c)) in pattern.iter().enumerate() {
             if r == c {
                 diagonal[r] = k;
             }
@@ -103,7 +108,7 @@ impl SparseCertifier {
             row_counts: factor.row_counts(),
             factor,
             diagonal,
-            entries: Arc::clone(upper),
+            upper: Arc::clone(upper),
             factorizations: 0,
             shifts: ShiftMemory::default(),
             last_gap: None,
@@ -136,7 +141,7 @@ impl SparseCertifier {
         let max_w = self
             .diagonal
             .iter()
-            .fold(0.0f64, |m, &k| m.max(self.entries[k].2.re));
+            .fold(0.0f64, |m, &k| m.max(self.upper.val()[k].re));
         (alpha * weight / lambda.len() as f64)
             .max(1e-15 * max_w)
             .max(f64::MIN_POSITIVE)
@@ -374,9 +379,9 @@ impl SparseCertifier {
         let rot0 = self.diagonal.len() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
         let mut finite = true;
-        let entries = &self.entries;
+        let upper = &self.upper;
         self.assembly.fill_with(|fill| {
-            for &(r, c, v) in entries.iter() {
+            for_each_entry(upper, |r, c, v| {
                 let s = scale[r] * scale[c];
                 let value = if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
@@ -387,7 +392,7 @@ impl SparseCertifier {
                 };
                 finite &= value.re.is_finite() && value.im.is_finite();
                 fill.push(value);
-            }
+            });
         });
         if !finite {
             return None;
@@ -421,8 +426,8 @@ impl SparseCertifier {
             return None;
         }
         let (precise, factor) = self.precise.get_or_insert_with(|| {
-            let pattern: Vec<(usize, usize)> =
-                self.entries.iter().map(|&(r, c, _)| (r, c)).collect();
+            let mut pattern = Vec::with_capacity(self.upper.val().len());
+            for_each_entry(&self.upper, |r, c, _| pattern.push((r, c)));
             let assembly = Assembly::<cx128>::new(dim, &pattern);
             let factor = SparseFactor::analyze_ordered(
                 assembly.matrix.symbolic(),
@@ -433,11 +438,11 @@ impl SparseCertifier {
         });
         let dd = |v: f64| fx128::from_f64(v);
         let u = <cx128 as crate::linalg::factor::Scalar>::UNIT_ROUNDOFF;
-        let mut values = Vec::with_capacity(self.entries.len());
+        let mut values = Vec::with_capacity(self.upper.val().len());
         for _ in 0..3 {
             let mut form = f64::MIN_POSITIVE;
             values.clear();
-            for &(r, c, v) in self.entries.iter() {
+            for_each_entry(&self.upper, |r, c, v| {
                 let s = scale[r] * scale[c];
                 values.push(if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
@@ -452,7 +457,7 @@ impl SparseCertifier {
                         im: dd(v.im * s),
                     }
                 });
-            }
+            });
             precise.fill(&values);
             self.factorizations += 1;
             if factor.ldlt(precise.matrix.as_ref()).is_ok() {
@@ -491,7 +496,7 @@ impl SparseCertifier {
         let mut a = vec![0.0; dim];
         let mut scale = vec![0.0; dim];
         for k in 0..dim {
-            let w = self.entries[self.diagonal[k]].2.re;
+            let w = self.upper.val()[self.diagonal[k]].re;
             let v = if k >= rot0 {
                 w - lambda[k - rot0] + eta
             } else {
@@ -524,13 +529,13 @@ impl SparseCertifier {
     /// [`Self::scaling`]: for [`Self::alpha`] and the ladder's [`ldlt_error_floor`].
     fn abs_row_sums(&self, a: &[f64], scale: &[f64]) -> Vec<f64> {
         let mut rows: Vec<f64> = (0..a.len()).map(|k| a[k] * scale[k] * scale[k]).collect();
-        for &(r, c, v) in self.entries.iter() {
+        for_each_entry(&self.upper, |r, c, v| {
             if r != c {
                 let e = v.norm() * scale[r] * scale[c];
                 rows[r] += e;
                 rows[c] += e;
             }
-        }
+        });
         rows
     }
 
@@ -545,20 +550,20 @@ impl SparseCertifier {
         let mut alpha = base;
         // Plus the rounding of each a_kk itself (two additions), in equilibrated units.
         for k in rot0..dim {
-            let w = self.entries[self.diagonal[k]].2.re;
+            let w = self.upper.val()[self.diagonal[k]].re;
             let magnitude = w + lambda[k - rot0].abs() + eta;
             alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
-        let entries = &self.entries;
+        let upper = &self.upper;
         self.assembly.fill_with(|fill| {
-            for &(r, c, v) in entries.iter() {
+            for_each_entry(upper, |r, c, v| {
                 let s = scale[r] * scale[c];
                 fill.push(if r == c {
                     c64::new(a[r] * s - alpha, 0.0)
                 } else {
                     v * s
                 });
-            }
+            });
         });
         self.factorizations += 1;
         self.factor.llt(self.assembly.matrix.as_ref()).is_ok()
@@ -594,16 +599,16 @@ impl SparseCertifier {
     fn fill_shifted(&mut self, lambda: &[f64], threshold: f64) {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
-        let entries = &self.entries;
+        let upper = &self.upper;
         self.assembly.fill_with(|fill| {
-            for &(r, c, v) in entries.iter() {
+            for_each_entry(upper, |r, c, v| {
                 fill.push(if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
                     c64::new(v.re - l - threshold, 0.0)
                 } else {
                     v
                 });
-            }
+            });
         });
     }
 }

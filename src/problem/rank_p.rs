@@ -19,7 +19,6 @@ use crate::graph::PoseGraph;
 use crate::problem::matrix::{PoseGraphMatrix, rotation, translation};
 use crate::problem::weights::EdgeWeight;
 use faer::c64;
-use std::sync::Arc;
 
 /// One edge's term of f: τ|p_j − p_i − Δ r_i|² + κ|r_j − R r_i|²; or, with `landmark`, one
 /// landmark observation's: ν|l_j − p_i − d r_i|² (`j` the landmark, τ = ν, Δ = d, κ = 0: the
@@ -44,11 +43,8 @@ pub struct Problem {
     /// Number of landmarks m.
     pub m: usize,
     pub terms: Vec<EdgeTerm>,
+    /// W̃, its upper triangle ([`PoseGraphMatrix::upper`]).
     pub matrix: PoseGraphMatrix,
-    /// Upper-triangle entries (row ≤ col) of W̃, diagonal included: (row, col, value). Shared
-    /// with the certificate ([`crate::certify::SparseCertifier`]), which keeps no copy of its own
-    /// (32 bytes an entry: 176 MB at 10⁶ poses).
-    pub upper: Arc<[(usize, usize, c64)]>,
     /// A fill-reducing rank of each pose, then of each landmark (node n + k)
     /// ([`crate::linalg::factor::pose_rank`]).
     pub pose_rank: Vec<usize>,
@@ -95,7 +91,7 @@ impl Problem {
         let label = &label;
         // The fill-reducing order (a fifth of this function's time on city10000, in perf
         // samples) on a second core beside the assembly.
-        let ((terms, matrix, upper), pose_rank) = crate::linalg::parallel::join(
+        let ((terms, matrix), pose_rank) = crate::linalg::parallel::join(
             || Self::assemble(graph, weights, label),
             || {
                 crate::linalg::factor::pose_rank(
@@ -115,17 +111,16 @@ impl Problem {
             m,
             terms,
             matrix,
-            upper: upper.into(),
             pose_rank,
         }
     }
 
-    /// The terms, W̃ and its upper triangle with every diagonal entry.
+    /// The terms and W̃.
     fn assemble(
         graph: &PoseGraph,
         weights: &[EdgeWeight],
         label: impl Fn(usize) -> usize,
-    ) -> (Vec<EdgeTerm>, PoseGraphMatrix, Vec<(usize, usize, c64)>) {
+    ) -> (Vec<EdgeTerm>, PoseGraphMatrix) {
         let marks = &graph.landmarks;
         let terms = graph
             .edges
@@ -157,9 +152,7 @@ impl Problem {
             )
             .collect();
         let matrix = PoseGraphMatrix::relabeled(graph, weights, &label);
-        let mut upper = Vec::with_capacity(matrix.upper.compute_nnz());
-        upper.extend(matrix.upper_entries());
-        (terms, matrix, upper)
+        (terms, matrix)
     }
 
     /// The pose of each row of X (positions of poses 1..n−1, the landmarks as nodes n..n+m,
@@ -502,10 +495,10 @@ mod tests {
         }
         // The bounds scale with the residuals, not with Σ W̃_kk|x_k|² (positions 2000 m out).
         let spread: f64 = problem
-            .upper
-            .iter()
+            .matrix
+            .upper_entries()
             .filter(|(r, c, _)| r == c)
-            .map(|&(r, _, w)| w.re * x.x[r].norm_sqr())
+            .map(|(r, _, w)| w.re * x.x[r].norm_sqr())
             .sum();
         assert!(
             e.cost_error < 1e-12 * e.cost,

@@ -53,8 +53,8 @@ pub fn sparse_spectra(
             "the multipliers λ are not all finite".into(),
         ));
     }
-    let penalized: Vec<(usize, usize, c64)> = problem
-        .upper
+    let upper: Vec<(usize, usize, c64)> = problem.matrix.upper_entries().collect();
+    let penalized: Vec<(usize, usize, c64)> = upper
         .iter()
         .map(|&(r, c, v)| {
             if r == c && r >= positions {
@@ -74,16 +74,12 @@ pub fn sparse_spectra(
         order: &order,
         form: Some(form),
     };
-    let w = smallest_eigenvalues(&pencil(&problem.upper, 0..dim, &w_form), count, &options)
+    let w = smallest_eigenvalues(&pencil(&upper, 0..dim, &w_form), count, &options)
         .map_err(|_| overflow())?;
     let wl = smallest_eigenvalues(&pencil(&penalized, 0..dim, &wl_form), count, &options)
         .map_err(|_| overflow())?;
-    let m = smallest_eigenvalues(
-        &pencil(&problem.upper, positions..dim, &w_form),
-        count,
-        &options,
-    )
-    .map_err(|_| crate::problem::checks::singular_laplacian(graph, weights))?;
+    let m = smallest_eigenvalues(&pencil(&upper, positions..dim, &w_form), count, &options)
+        .map_err(|_| crate::problem::checks::singular_laplacian(graph, weights))?;
     Ok(SparseSpectra {
         converged: w.converged && wl.converged && m.converged,
         eigenvalues: w.values,

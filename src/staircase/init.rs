@@ -80,10 +80,11 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
     let r0 = problem.rotation_row(0);
     let dim = problem.rows() - 1;
     let at = |k: usize| if k < r0 { k } else { k - 1 };
-    let mut entries = Vec::with_capacity(problem.upper.len());
-    let mut values = Vec::with_capacity(problem.upper.len());
+    let nnz = problem.matrix.upper.val().len();
+    let mut entries = Vec::with_capacity(nnz);
+    let mut values = Vec::with_capacity(nnz);
     let mut rhs = vec![c64::new(0.0, 0.0); dim];
-    for &(a, b, v) in problem.upper.iter() {
+    problem.matrix.for_each_upper(|a, b, v| {
         match (a == r0, b == r0) {
             (true, true) => {}
             // W̃ y = −W̃[:, r0] · 1: the column of r0 moves to the right-hand side.
@@ -94,7 +95,7 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
                 values.push(v);
             }
         }
-    }
+    });
     let order: Vec<usize> = problem
         .row_order()
         .into_iter()

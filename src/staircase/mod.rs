@@ -398,7 +398,7 @@ pub fn certify_estimate(
             .map(|v| v * v)
             .sum::<f64>()
             .sqrt();
-    let mut certifier = SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order());
+    let mut certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
     let bound = certifier.certify(problem, &x, &lambda, reach);
     EstimateCertificate {
         cost,
@@ -793,7 +793,7 @@ fn solve_from_start(
         || {
             options
                 .certify
-                .then(|| SparseCertifier::new(problem.rows(), &problem.upper, &problem.row_order()))
+                .then(|| SparseCertifier::new(&problem.matrix.upper, &problem.row_order()))
         },
         |system, positions| {
             let start = start();
