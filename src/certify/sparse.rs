@@ -353,6 +353,13 @@ impl SparseCertifier {
         self.factor.reuse(c64::room_of(values));
     }
 
+    /// Forgets the enclosure kept for the next certificate at the same point ([`Self::temple_eta`]):
+    /// for a point about to move (a polish), whose enclosure and key (80 MB at 10⁶ poses) would
+    /// only be replaced.
+    pub fn forget_point(&mut self) {
+        self.last_enclosure = None;
+    }
+
     /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):
     /// for a phase between two certificates that needs the memory, such as a Newton polish.
     pub fn release_factor(&mut self) {

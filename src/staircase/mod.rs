@@ -846,6 +846,7 @@ fn solve_from_start(
         options.tolerance * local.cost.max(1.0),
     ) {
         let before = local.iterations;
+        certifier.forget_point();
         crate::progress::phase("Newton polish, rank 1 (the residual is too large for the bound)");
         local = polish_in(problem, local, &mut rank_one);
         iterations += local.iterations - before;
@@ -876,6 +877,7 @@ fn solve_from_start(
         let before = local.iterations;
         // The certificate's factor gives its memory to Newton's and takes it back after.
         certifier.release_factor();
+        certifier.forget_point();
         crate::progress::phase("Newton polish, rank 1 (the certificate's bound fell short)");
         // The Newton system is built for this polish and goes with it.
         local = polish(problem, local);
