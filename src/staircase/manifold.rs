@@ -24,8 +24,8 @@ pub struct TangentBasis {
     position_vectors: Vec<c64>,
     /// The rotation rows' basis vectors in order, 2p − 1 per row, p entries each (one
     /// allocation). Storing every row's, with the offsets, wrote 64 MB at every Newton step at
-    /// rank 1 and 10⁶ poses, 16 MB now: with the allocator's thresholds
-    /// (`cli::memory`), the solve's page faults fell by 6% and its peak memory by 95 MB.
+    /// rank 1 and 10⁶ poses, 16 MB now: with the allocator's thresholds (`cli::memory`), the
+    /// solve's page faults fell by 6% and its peak memory by 107 MiB.
     rotation_vectors: Vec<c64>,
     pub dim: usize,
 }
@@ -40,21 +40,15 @@ impl TangentBasis {
         for k in positions..rows {
             sphere_basis(x.row(k), &mut rotation_vectors);
         }
-        let basis = TangentBasis {
+        let dim = 2 * p * positions + (2 * p - 1) * (rows - positions);
+        debug_assert_eq!((dim - 2 * p * positions) * p, rotation_vectors.len());
+        TangentBasis {
             p,
             rows,
             positions,
             position_vectors,
             rotation_vectors,
-            dim: 0,
-        };
-        debug_assert_eq!(
-            (basis.offset(rows) - basis.offset(positions)) * p,
-            basis.rotation_vectors.len()
-        );
-        TangentBasis {
-            dim: basis.offset(rows),
-            ..basis
+            dim,
         }
     }
 
