@@ -41,7 +41,8 @@ pub struct SparseCertifier {
     row_counts: Vec<u32>,
     /// Position of each diagonal entry of W̃ in the upper-triangle entry list.
     diagonal: Vec<usize>,
-    /// W̃'s upper triangle, shared with the problem ([`crate::problem::matrix::PoseGraphMatrix::upper`]).
+    /// W̃'s upper triangle, shared with the problem
+    /// ([`crate::problem::matrix::PoseGraphMatrix::upper`]).
     upper: Arc<SparseColMat<usize, c64>>,
     /// Number of factorizations attempted so far.
     pub factorizations: usize,
@@ -88,8 +89,8 @@ impl SparseCertifier {
     }
 
     /// Analyzes the pattern of W̃ (its upper triangle, diagonal included, as in
-    /// [`crate::problem::matrix::PoseGraphMatrix::upper`]) once, rows in a fill-reducing `order`; every later
-    /// certificate reuses it.
+    /// [`crate::problem::matrix::PoseGraphMatrix::upper`]) once, rows in a fill-reducing
+    /// `order`; every later certificate reuses it.
     pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
         let dim = upper.ncols();
         let mut pattern = Vec::with_capacity(upper.val().len());

@@ -42,7 +42,7 @@ pub struct PoseGraphMatrix {
     /// The upper triangle of W̃ ((2n−1+m) x (2n−1+m) Hermitian), every diagonal entry stored
     /// (zero for a pose without edges), so that penalized and shifted matrices share its
     /// pattern. Shared with the certificate ([`crate::certify::SparseCertifier`]), which keeps
-    /// no copy of its own (24 bytes an entry: 130 MB at 10⁶ poses).
+    /// no copy of its own (24 bytes an entry: 155 MB at 10⁶ poses).
     pub upper: Arc<SparseColMat<usize, c64>>,
 }
 
@@ -312,6 +312,7 @@ impl Upper<'_> {
 /// columns, as [`upper_triangle`] builds them), column by column; the k-th call is the matrix's
 /// k-th stored value.
 pub fn for_each_entry(m: &SparseColMat<usize, c64>, mut f: impl FnMut(usize, usize, c64)) {
+    debug_assert!(m.symbolic().col_nnz().is_none(), "a compact matrix");
     let (col_ptr, rows, values) = (m.symbolic().col_ptr(), m.symbolic().row_idx(), m.val());
     for c in 0..m.ncols() {
         for k in col_ptr[c]..col_ptr[c + 1] {
