@@ -80,11 +80,7 @@ fn main() {
             ));
         });
         let order = group_ordering(&problem.pose_rank, &problem.row_poses());
-        let pattern: Vec<(usize, usize)> = problem
-            .matrix
-            .upper_entries()
-            .map(|(r, c, _)| (r, c))
-            .collect();
+        let pattern = pgo::problem::matrix::entry_pattern(&problem.matrix.upper);
         let dim = problem.rows();
         let mut assembly = Assembly::new(dim, &pattern);
         let analyze_s = median(&mut || {

@@ -1,7 +1,7 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
 use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
-use crate::problem::matrix::for_each_entry;
+use crate::problem::matrix::{entry_pattern, for_each_entry};
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::sparse::SparseColMat;
 use faer::{c64, cx128, fx128};
@@ -93,8 +93,7 @@ impl SparseCertifier {
     /// `order`; every later certificate reuses it.
     pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
         let dim = upper.ncols();
-        let mut pattern = Vec::with_capacity(upper.val().len());
-        for_each_entry(upper, |r, c, _| pattern.push((r, c)));
+        let pattern = entry_pattern(upper);
         let assembly = Assembly::<c64>::new(dim, &pattern);
         let factor =
             SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::AutoComplex);
@@ -434,9 +433,7 @@ impl SparseCertifier {
             return None;
         }
         let (precise, factor) = self.precise.get_or_insert_with(|| {
-            let mut pattern = Vec::with_capacity(self.upper.val().len());
-            for_each_entry(&self.upper, |r, c, _| pattern.push((r, c)));
-            let assembly = Assembly::<cx128>::new(dim, &pattern);
+            let assembly = Assembly::<cx128>::new(dim, &entry_pattern(&self.upper));
             let factor = SparseFactor::analyze_ordered(
                 assembly.matrix.symbolic(),
                 &self.order,

@@ -321,6 +321,14 @@ pub fn for_each_entry(m: &SparseColMat<usize, c64>, mut f: impl FnMut(usize, usi
     }
 }
 
+/// The (row, column) of every entry of a compact sparse matrix, in [`for_each_entry`]'s order:
+/// the pattern an [`crate::linalg::factor::Assembly`] of the same matrix is built from.
+pub fn entry_pattern(m: &SparseColMat<usize, c64>) -> Vec<(usize, usize)> {
+    let mut pattern = Vec::with_capacity(m.val().len());
+    for_each_entry(m, |r, c, _| pattern.push((r, c)));
+    pattern
+}
+
 /// The upper triangle (every diagonal entry included, zero or not) of the `dim` x `dim` Hermitian
 /// matrix that `terms` adds up, each entry the sum of its terms in the order `terms` gives them,
 /// from 0; rows ascending in each column. Two passes over the terms (count each column's, then

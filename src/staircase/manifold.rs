@@ -5,6 +5,7 @@
 //! retraction, and the sparse Newton system built from them.
 
 use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor, block_coordinates};
+use crate::problem::matrix::entry_pattern;
 use crate::problem::rank_p::{Point, Problem, dot};
 use faer::Side;
 use faer::c64;
@@ -289,11 +290,7 @@ impl NewtonSystem {
         // problem's fill-reducing order, each row's coordinates together.
         let offsets = TangentBasis::offsets(problem, p);
         let sizes: Vec<usize> = offsets.windows(2).map(|w| w[1] - w[0]).collect();
-        let blocks: Vec<(usize, usize)> = problem
-            .matrix
-            .upper_entries()
-            .map(|(k, l, _)| (k, l))
-            .collect();
+        let blocks = entry_pattern(&problem.matrix.upper);
         let row_order = problem.row_order();
         let order = block_coordinates(&row_order, &offsets);
         // The layout from the factor's flop ratio, with the crossover measured on these systems
