@@ -186,6 +186,10 @@ fn end_line(values: impl IntoIterator<Item = f64>, buf: &mut Vec<u8>) {
 /// Edges from which [`write`] formats the lines of two halves on two threads: at least this many.
 const PARALLEL_EDGES: usize = 8192;
 
+/// Edges from which [`write3`] formats the lines of two halves on two threads: a 3D edge's line
+/// has three times the numbers of a planar one.
+const PARALLEL_EDGES_3D: usize = PARALLEL_EDGES / 3;
+
 /// What an edge's line needs: the graph, its Vertigo kinds, the edge tag and the noise order.
 struct EdgeLines<'a> {
     graph: &'a PoseGraph,
@@ -457,18 +461,49 @@ fn write3_named(
         }
         Ok(())
     };
-    for (id, pose) in graph.ids.iter().zip(&graph.poses) {
-        buf.extend_from_slice(vertex_tag.as_bytes());
-        let _ = write!(buf, " {id}");
-        end_line(pose.values(), &mut buf);
-        put(&mut buf, false)?;
-    }
-    for e in &graph.edges {
+    let edge_line = |e: &crate::graph3::Edge3, buf: &mut Vec<u8>| {
         buf.extend_from_slice(edge_tag.as_bytes());
         let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
-        end_line(e.measurement.values().chain(e.information.0), &mut buf);
-        put(&mut buf, false)?;
-    }
+        end_line(e.measurement.values().chain(e.information.0), buf);
+    };
+    // As in 2D ([`write_named`]): with a second core, the last edges' lines are formatted there
+    // into a buffer of their own while this thread formats the vertices and the first edges
+    // (each line alone, so the bytes are the same). A vertex line has 7 numbers, an edge's 28.
+    let m = graph.edges.len();
+    let split =
+        m >= PARALLEL_EDGES_3D && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    let mid = if split {
+        m.saturating_sub(graph.poses.len() / 4) / 2
+    } else {
+        m
+    };
+    std::thread::scope(|scope| -> crate::Result<()> {
+        let last = split.then(|| {
+            scope.spawn(|| {
+                let mut last = Vec::with_capacity((m - mid) * 400);
+                for e in &graph.edges[mid..] {
+                    edge_line(e, &mut last);
+                }
+                last
+            })
+        });
+        for (id, pose) in graph.ids.iter().zip(&graph.poses) {
+            buf.extend_from_slice(vertex_tag.as_bytes());
+            let _ = write!(buf, " {id}");
+            end_line(pose.values(), &mut buf);
+            put(&mut buf, false)?;
+        }
+        for e in &graph.edges[..mid] {
+            edge_line(e, &mut buf);
+            put(&mut buf, false)?;
+        }
+        if let Some(last) = last {
+            let last = last.join().expect("formatting lines does not panic");
+            put(&mut buf, true)?;
+            buf = last;
+        }
+        Ok(())
+    })?;
     if !graph.fixed.is_empty() {
         buf.extend_from_slice(g2o::FIX.as_bytes());
         for &k in &graph.fixed {
