@@ -142,6 +142,9 @@ impl TangentBasis {
         mut out: impl FnMut(f64),
     ) {
         let positions = problem.positions();
+        if self.p == 1 {
+            return self.hessian_values_rank_one(problem, lambda, mu, out);
+        }
         problem.matrix.for_each_upper(|k, l, w| {
             for s in 0..self.len(k) {
                 let bs = self.vector(k, s);
@@ -156,6 +159,49 @@ impl TangentBasis {
                             .zip(bt)
                             .map(|(x, y)| (x.conj() * w * y).re)
                             .sum::<f64>();
+                    if a == b {
+                        if k >= positions {
+                            v -= 2.0 * lambda[k - positions];
+                        }
+                        v += mu * 2.0 * w.re;
+                    }
+                    out(v);
+                }
+            }
+        });
+    }
+
+    /// [`TangentBasis::hessian_values`] at rank 1, the staircase's usual rank, where each basis
+    /// vector is one complex number: the same values in the same order and the same arithmetic
+    /// (2·Re(b̄_s w b_t), the λ and damping terms on the diagonal), with the rows' vectors and
+    /// offsets looked up once per entry of W̃ instead of once per value (on victoriaPark the
+    /// general form took 0.6 ms per Newton step).
+    fn hessian_values_rank_one(
+        &self,
+        problem: &Problem,
+        lambda: &[f64],
+        mu: f64,
+        mut out: impl FnMut(f64),
+    ) {
+        let positions = problem.positions();
+        let vectors = |k: usize| -> &[c64] {
+            if k < positions {
+                &self.position_vectors
+            } else {
+                std::slice::from_ref(&self.rotation_vectors[k - positions])
+            }
+        };
+        problem.matrix.for_each_upper(|k, l, w| {
+            let (bk, bl) = (vectors(k), vectors(l));
+            let (ok, ol) = (self.offset(k), self.offset(l));
+            for (s, &bs) in bk.iter().enumerate() {
+                for (t, &bt) in bl.iter().enumerate() {
+                    let (a, b) = (ok + s, ol + t);
+                    if a > b {
+                        continue;
+                    }
+                    // One term: the general form's sum over the p = 1 entries, as it sums it.
+                    let mut v = 2.0 * std::iter::once((bs.conj() * w * bt).re).sum::<f64>();
                     if a == b {
                         if k >= positions {
                             v -= 2.0 * lambda[k - positions];
