@@ -105,10 +105,10 @@ pub fn chordal(problem: &Problem3) -> Point3 {
     let m = 3 * (n - 1);
     // The matrix, pose pair by pose pair: a 3x3 block for each pair u < v of the graph (Problem3's
     // pairs, sorted) and the upper triangle of each pose's own block, summed term by term in the
-    // terms' order; its CSC built from them directly. (Built entry by entry and sorted, its
-    // assembly's arrays took 10 MB on torus3D: 7 of the relaxation's 25 ms, mostly their pages'
-    // first writes.) The same pattern, entry for entry, and the same sums in the same order as
-    // that assembly: the same bits.
+    // terms' order; its CSC built from them directly. (Listed entry by entry and sorted by an
+    // assembly, with 10 MB of arrays, it took 7 of the relaxation's 25 ms on torus3D; built from
+    // the blocks, the relaxation takes 3 ms less.) The same pattern, entry for entry, and the
+    // same sums in the same order as that assembly: the same bits.
     let others = &problem.pairs[n..];
     let mut off = vec![[[0.0f64; 3]; 3]; others.len()];
     let mut own = vec![[[0.0f64; 3]; 3]; n];
