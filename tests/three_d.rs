@@ -342,3 +342,39 @@ fn pgo_convert_round_trips_toro_3d_and_reads_3d_on_stdin() {
     assert!(run.status.success(), "{}", text(&run.stderr));
     assert_eq!(text(&run.stdout), toro);
 }
+
+/// A path that can be read only once (a FIFO, as a shell's `<(zcat graph.g2o.gz)` gives; here
+/// /dev/stdin on a pipe): a 3D file is read from it as from the file itself. (The planar reader
+/// used to drain it and the 3D reader then found it empty.)
+#[test]
+fn a_3d_file_is_read_from_a_path_that_can_be_read_once() {
+    for name in ["tinyGrid3D.g2o", "smallGrid3D.g2o"] {
+        let path = datasets_dir().join(name);
+        let from_file = Command::new(bin("pgo-solve"))
+            .args([s(&path), "--json", "--no-timings"])
+            .output()
+            .unwrap();
+        assert!(from_file.status.success(), "{}", text(&from_file.stderr));
+        let bytes = std::fs::read(&path).unwrap();
+        let from_pipe = common::run_with_stdin(
+            "pgo-solve",
+            &["/dev/stdin", "--json", "--no-timings"],
+            Some(&bytes),
+        );
+        assert!(
+            from_pipe.status.success(),
+            "{name}: {}",
+            text(&from_pipe.stderr)
+        );
+        assert_eq!(text(&from_pipe.stdout), text(&from_file.stdout), "{name}");
+        // pgo-convert describes it as the 3D graph it is.
+        let convert =
+            common::run_with_stdin("pgo-convert", &["/dev/stdin", "--stats"], Some(&bytes));
+        assert!(
+            convert.status.success(),
+            "{name}: {}",
+            text(&convert.stderr)
+        );
+        assert!(text(&convert.stdout).contains("(SE(3) poses)"), "{name}");
+    }
+}

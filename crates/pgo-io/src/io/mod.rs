@@ -44,44 +44,67 @@ pub enum AnyGraph {
 
 /// Reads a planar or a 3D graph from a path (stdin for `-`): the planar reader first, exactly
 /// as [`read_path`] (so planar files give the same graph, warnings and errors); if it stops at a
-/// 3D tag ([`ParseErrorKind::ThreeD`]), the whole input is read again by [`read3`].
+/// 3D tag ([`ParseErrorKind::ThreeD`]), the whole input is read again by [`read3`]. Input that
+/// can be read only once (stdin, a FIFO such as a shell's `<(zcat graph.g2o.gz)`, a device) is
+/// read once, as [`read_any_stream`] reads it.
 pub fn read_any_path(path: &str, options: &ReadOptions) -> crate::Result<(AnyGraph, ReadReport)> {
     if path == "-" {
-        // stdin is read once: the planar reader streams it as before, and a copy of what it
-        // consumed is kept (up to TEE_MAX bytes) for the 3D reader, which reads that and the rest.
         let stdin = std::io::stdin();
-        let mut tee = Tee {
-            inner: stdin.lock(),
-            kept: Vec::new(),
-            complete: true,
-        };
-        return match read(&mut tee, "<stdin>", options) {
-            Err(crate::Error::Parse(e))
-                if matches!(e.kind, ParseErrorKind::ThreeD { .. }) && tee.complete =>
-            {
-                let mut bytes = std::mem::take(&mut tee.kept);
-                tee.inner
-                    .read_to_end(&mut bytes)
-                    .map_err(|e| crate::Error::io("<stdin>", e))?;
-                let (graph, report) = read3(&bytes, "<stdin>", options)?;
-                Ok((AnyGraph::Spatial(graph), report))
-            }
-            other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
-        };
+        return read_any_stream(stdin.lock(), "<stdin>", options);
+    }
+    let io = |e| crate::Error::io(path, e);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() && !meta.is_dir() {
+        return read_any_stream(file, path, options);
     }
     match read_path(path, options) {
         Err(crate::Error::Parse(e)) if matches!(e.kind, ParseErrorKind::ThreeD { .. }) => {
-            let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
-            let (graph, report) = read3(&bytes, path, options)?;
+            let (graph, report) = match reader::mapped(&file, &meta) {
+                Some(map) => read3(&map, path, options)?,
+                None => {
+                    let mut bytes = Vec::new();
+                    file.read_to_end(&mut bytes).map_err(io)?;
+                    read3(&bytes, path, options)?
+                }
+            };
             Ok((AnyGraph::Spatial(graph), report))
         }
         other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
     }
 }
 
-/// Bytes of stdin kept for the 3D reader while the planar reader streams it. Beyond this the
-/// copy is dropped (memory stays bounded for planar input): a 3D tag that far into stdin (after
-/// 64 MB of other lines) is reported as the planar reader's error.
+/// [`read_any_path`] on input read once (`name` is what messages call it): the planar reader
+/// streams it, and a copy of what it consumed is kept (up to [`TEE_MAX`] bytes) for the 3D
+/// reader, which reads that and the rest.
+pub fn read_any_stream<R: Read>(
+    input: R,
+    name: &str,
+    options: &ReadOptions,
+) -> crate::Result<(AnyGraph, ReadReport)> {
+    let mut tee = Tee {
+        inner: input,
+        kept: Vec::new(),
+        complete: true,
+    };
+    match read(&mut tee, name, options) {
+        Err(crate::Error::Parse(e))
+            if matches!(e.kind, ParseErrorKind::ThreeD { .. }) && tee.complete =>
+        {
+            let mut bytes = std::mem::take(&mut tee.kept);
+            tee.inner
+                .read_to_end(&mut bytes)
+                .map_err(|e| crate::Error::io(name, e))?;
+            let (graph, report) = read3(&bytes, name, options)?;
+            Ok((AnyGraph::Spatial(graph), report))
+        }
+        other => other.map(|(g, r)| (AnyGraph::Planar(g), r)),
+    }
+}
+
+/// Bytes of input read once kept for the 3D reader while the planar reader streams it. Beyond
+/// this the copy is dropped (memory stays bounded for planar input): a 3D tag that far into the
+/// input (after 64 MB of other lines) is reported as the planar reader's error.
 const TEE_MAX: usize = 64 << 20;
 
 /// A reader that keeps a copy of what it reads, up to [`TEE_MAX`] bytes.

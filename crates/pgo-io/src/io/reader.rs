@@ -40,18 +40,26 @@ pub fn read_path(path: &str, options: &ReadOptions) -> crate::Result<(PoseGraph,
     }
     let file = std::fs::File::open(path).map_err(|e| crate::Error::io(path, e))?;
     let meta = file.metadata().map_err(|e| crate::Error::io(path, e))?;
-    if meta.is_file() && meta.len() > 0 && meta.len() <= MMAP_MAX {
-        // SAFETY: the map is only read, and only while this function runs. If another process
-        // truncated the file meanwhile, reading the lost pages would fault (as it would for
-        // ripgrep and every other mmap reader); pgo accepts that for speed: mapping avoids
-        // copying the file and takes one page fault per 16 pages instead of one per page.
-        if let Ok(map) = unsafe { memmap2::Mmap::map(&file) } {
-            let mut r = Reader::new(path, options, Some(meta.len()));
-            r.parse_chunk(&map)?;
-            return Ok(r.finish()?);
-        }
+    if let Some(map) = mapped(&file, &meta) {
+        let mut r = Reader::new(path, options, Some(meta.len()));
+        r.parse_chunk(&map)?;
+        return Ok(r.finish()?);
     }
     read_sized(file, path, options, Some(meta.len()))
+}
+
+/// The file mapped into memory, read only, if it is a regular non-empty file of at most
+/// [`MMAP_MAX`] bytes (and the map succeeds). Mapping avoids copying the file into fresh memory
+/// and takes one page fault per 16 pages instead of one per page: for the 3D reader,
+/// sphere_bignoise's 2.2 MB were a 1.1 ms read and 1.3 ms of page faults copied.
+pub(crate) fn mapped(file: &std::fs::File, meta: &std::fs::Metadata) -> Option<memmap2::Mmap> {
+    if !(meta.is_file() && meta.len() > 0 && meta.len() <= MMAP_MAX) {
+        return None;
+    }
+    // SAFETY: the map is only read, and only while the caller parses it. If another process
+    // truncated the file meanwhile, reading the lost pages would fault (as it would for ripgrep
+    // and every other mmap reader); pgo accepts that for speed.
+    unsafe { memmap2::Mmap::map(file) }.ok()
 }
 
 /// Files up to this size are mapped into memory and parsed in place; larger ones are read in
