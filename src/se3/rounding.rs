@@ -6,7 +6,7 @@
 
 use super::problem::{Point3, Problem3};
 use super::stiefel::nearest_rotation;
-use crate::linalg::factor::SparseFactor;
+use crate::linalg::factor::{SparseFactor, column_buckets};
 
 /// A pose as a rotation matrix (row-major) and a translation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,20 +164,8 @@ pub fn chordal(problem: &Problem3) -> Point3 {
             }
         }
     }
-    // The pairs by their second pose (a counting sort: first poses ascending within each).
-    let mut by_second = vec![0usize; n + 1];
-    for &(_, v) in others {
-        by_second[v + 1] += 1;
-    }
-    for v in 0..n {
-        by_second[v + 1] += by_second[v];
-    }
-    let mut slot = by_second.clone();
-    let mut second = vec![0usize; others.len()];
-    for (k, &(_, v)) in others.iter().enumerate() {
-        second[slot[v]] = k;
-        slot[v] += 1;
-    }
+    // The pairs by their second pose, first poses ascending within each (the pairs are sorted).
+    let (by_second, second) = column_buckets(n, others.iter().map(|&(_, v)| v));
     let mut col_ptr = Vec::with_capacity(m + 1);
     let mut row_idx = Vec::new();
     let mut vals = Vec::new();
