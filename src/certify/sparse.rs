@@ -34,7 +34,12 @@ use std::sync::Arc;
 /// equilibrated coordinates. So η is set by the problem's scale (the diagonal of W̃ and the
 /// spread of the estimate) and never falls below the backward error.
 pub struct SparseCertifier {
-    assembly: Assembly<c64>,
+    /// The values of the matrix each factorization factors (W̃(λ), shifted and scaled as its
+    /// proof needs), entry for entry in W̃'s own pattern ([`Self::write`]), which is that
+    /// matrix's pattern; allocated at the first factorization. (An assembly of its own, a copy
+    /// of the pattern with identity slots, took 114 MB at 10⁶ poses, and its values 99 MB more
+    /// through the Newton steps.)
+    values: Vec<c64>,
     factor: SparseFactor<c64>,
     /// The factor's row counts ([`SparseFactor::row_counts`]), for the ladder's
     /// [`ldlt_error_floor`].
@@ -93,18 +98,17 @@ impl SparseCertifier {
     /// `order`; every later certificate reuses it.
     pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
         let dim = upper.ncols();
-        let pattern = entry_pattern(upper);
-        let assembly = Assembly::<c64>::new(dim, &pattern);
-        let factor =
-            SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::AutoComplex);
+        let factor = SparseFactor::analyze_ordered(upper.symbolic(), order, Layout::AutoComplex);
         let mut diagonal = vec![usize::MAX; dim];
-        for (k, &(r, c)) in pattern.iter().enumerate() {
+        let mut k = 0;
+        for_each_entry(upper, |r, c, _| {
             if r == c {
                 diagonal[r] = k;
             }
-        }
+            k += 1;
+        });
         SparseCertifier {
-            assembly,
+            values: Vec::new(),
             row_counts: factor.row_counts(),
             factor,
             diagonal,
@@ -360,10 +364,12 @@ impl SparseCertifier {
         self.last_enclosure = None;
     }
 
-    /// Frees the numeric factor (the analysis stays; the next factorization allocates it again):
-    /// for a phase between two certificates that needs the memory, such as a Newton polish.
+    /// Frees the numeric factor and the values (the analysis stays; the next factorization
+    /// allocates them again): for a phase between two certificates that needs the memory, such
+    /// as a Newton polish.
     pub fn release_factor(&mut self) {
         self.factor.release();
+        self.values = Vec::new();
     }
 
     /// The next certificate is of the same minimum, polished (multipliers moved by its last
@@ -386,26 +392,23 @@ impl SparseCertifier {
         let rot0 = self.diagonal.len() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
         let mut finite = true;
-        let upper = &self.upper;
-        self.assembly.fill_with(|fill| {
-            for_each_entry(upper, |r, c, v| {
-                let s = scale[r] * scale[c];
-                let value = if r == c {
-                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                    form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
-                    c64::new((v.re - l) * s - mu, 0.0)
-                } else {
-                    v * s
-                };
-                finite &= value.re.is_finite() && value.im.is_finite();
-                fill.push(value);
-            });
+        self.write(|r, c, v| {
+            let s = scale[r] * scale[c];
+            let value = if r == c {
+                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                form = form.max(4.0 * U * ((v.re.abs() + l.abs()) * s + mu));
+                c64::new((v.re - l) * s - mu, 0.0)
+            } else {
+                v * s
+            };
+            finite &= value.re.is_finite() && value.im.is_finite();
+            value
         });
         if !finite {
             return None;
         }
         self.factorizations += 1;
-        if self.factor.ldlt(self.assembly.matrix.as_ref()).is_err() {
+        if self.factor.ldlt(matrix(&self.upper, &self.values)).is_err() {
             return Some(None);
         }
         let negative = self.factor.inertia_below(0.0);
@@ -559,19 +562,16 @@ impl SparseCertifier {
             let magnitude = w + lambda[k - rot0].abs() + eta;
             alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
-        let upper = &self.upper;
-        self.assembly.fill_with(|fill| {
-            for_each_entry(upper, |r, c, v| {
-                let s = scale[r] * scale[c];
-                fill.push(if r == c {
-                    c64::new(a[r] * s - alpha, 0.0)
-                } else {
-                    v * s
-                });
-            });
+        self.write(|r, c, v| {
+            let s = scale[r] * scale[c];
+            if r == c {
+                c64::new(a[r] * s - alpha, 0.0)
+            } else {
+                v * s
+            }
         });
         self.factorizations += 1;
-        self.factor.llt(self.assembly.matrix.as_ref()).is_ok()
+        self.factor.llt(matrix(&self.upper, &self.values)).is_ok()
     }
 
     /// The eigenvalues of W̃(λ) at zero: the count a deflated proof established when `bound` is
@@ -588,7 +588,7 @@ impl SparseCertifier {
     /// negative pivots of an LDLᴴ of W̃(λ) − threshold·I). `None` on a zero pivot.
     pub fn count_below(&mut self, lambda: &[f64], threshold: f64) -> Option<usize> {
         self.fill_shifted(lambda, threshold);
-        self.factor.ldlt(self.assembly.matrix.as_ref()).ok()?;
+        self.factor.ldlt(matrix(&self.upper, &self.values)).ok()?;
         Some(self.factor.inertia_below(0.0))
     }
 
@@ -598,24 +598,42 @@ impl SparseCertifier {
         lambda: &[f64],
     ) -> faer::sparse::SparseColMatRef<'_, usize, c64> {
         self.fill_shifted(lambda, 0.0);
-        self.assembly.matrix.as_ref()
+        matrix(&self.upper, &self.values)
     }
 
     fn fill_shifted(&mut self, lambda: &[f64], threshold: f64) {
         let dim = self.diagonal.len();
         let rot0 = dim - lambda.len();
-        let upper = &self.upper;
-        self.assembly.fill_with(|fill| {
-            for_each_entry(upper, |r, c, v| {
-                fill.push(if r == c {
-                    let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                    c64::new(v.re - l - threshold, 0.0)
-                } else {
-                    v
-                });
-            });
+        self.write(|r, c, v| {
+            if r == c {
+                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+                c64::new(v.re - l - threshold, 0.0)
+            } else {
+                v
+            }
         });
     }
+
+    /// Writes the values of the next matrix to factor, `value(row, column, W̃'s entry)` for each
+    /// entry of W̃'s upper triangle in its stored order ([`for_each_entry`]). Each is added to
+    /// a zero, as an [`Assembly`] adds it to its slot (so a −0 is stored as +0, bit for bit as
+    /// before).
+    fn write(&mut self, mut value: impl FnMut(usize, usize, c64) -> c64) {
+        let values = &mut self.values;
+        values.clear();
+        values.reserve_exact(self.upper.val().len());
+        for_each_entry(&self.upper, |r, c, v| {
+            values.push(c64::new(0.0, 0.0) + value(r, c, v))
+        });
+    }
+}
+
+/// The matrix of W̃'s pattern (`upper`) with `values` ([`SparseCertifier::write`]).
+fn matrix<'a>(
+    upper: &'a SparseColMat<usize, c64>,
+    values: &'a [c64],
+) -> faer::sparse::SparseColMatRef<'a, usize, c64> {
+    faer::sparse::SparseColMatRef::new(upper.symbolic(), values)
 }
 
 /// Whether a memo's `key` holds exactly `bits`, compared as they come: no key is built for a

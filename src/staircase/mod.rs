@@ -588,6 +588,9 @@ fn optimize_in(
         if rho > 1e-4 && predicted > 0.0 {
             let gain = at.cost - trial_cost;
             chord_next = !gauss_newton && chord_curvature.is_none() && gain <= 1e-6 * at.cost;
+            // The old iterate goes before the new one is built: at 10⁶ poses its point, basis,
+            // gradient and multipliers are some 85 MB, on top of the step's peak.
+            drop(at);
             at = Iterate::new(problem, trial, trial_cost);
             mu = (mu * fastest_decrease.max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-12);
             nu = 2.0;
@@ -625,6 +628,7 @@ fn optimize_in(
                 .then_some((trial, trial_cost))
         });
         if let Some((trial, trial_cost)) = shortened {
+            drop(at);
             at = Iterate::new(problem, trial, trial_cost);
             mu *= 2.0;
             continue;
