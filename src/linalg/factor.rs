@@ -190,6 +190,9 @@ impl<T: Scalar> SparseFactor<T> {
     ) -> Self {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: threshold,
+            supernodal_params: faer::sparse::linalg::SymbolicSupernodalParams {
+                relax: Some(SUPERNODE_RELAXATION),
+            },
             ..Default::default()
         };
         let symbolic = factorize_symbolic_cholesky(pattern, Side::Upper, ordering, params)
@@ -1147,6 +1150,20 @@ fn amd_rank(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, 
 /// but saved the factorizations about 1 s (whole process 45.2 s against 41.0 with AMD; at
 /// 10⁵ poses, 71, forcing it cost 21%).
 pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
+
+/// When faer merges two adjacent supernodes of n columns in all (relaxed supernodal
+/// amalgamation): where the merged block's fraction of stored zeros stays below the bound of the
+/// first (limit, bound) with n ≤ limit. Half faer's default bounds (1.0, 0.8, 0.1 and 0.05 for
+/// the same limits), whose merges stored the factors' zeros by the ten million at 10⁶ planar
+/// poses: the Newton LLᵀ's 103.4·10⁶ values against 85.5·10⁶ with these (788 MiB against 652),
+/// the certificate's LDLᴴ 53.9·10⁶ complex values against 38.3·10⁶ (822 MiB against 584). The
+/// larger dense blocks bought no speed: whole process at 10⁶ poses 13.6-14.0 s against
+/// 14.3-15.2 s (three runs each; 13.3 s both in a later pair), at 10⁵ poses 0.95 of the default's
+/// time, on the public files within 3% either way (medians of 9 to 21 interleaved runs).
+/// Merging nothing at all stored the fewest zeros (68.7·10⁶ Newton values) but ran slower
+/// (14.8-15.4 s at 10⁶), with more supernodes to index.
+pub const SUPERNODE_RELAXATION: &[(usize, f64)] =
+    &[(4, 0.5), (16, 0.3), (48, 0.05), (usize::MAX, 0.02)];
 
 /// `block_work` of [`pose_rank`] for the 3D problems: the Newton systems' 6 real rows per pose.
 pub const SPATIAL_BLOCK_WORK: f64 = 216.0;
