@@ -44,8 +44,6 @@ pub struct SparseCertifier {
     /// The factor's row counts ([`SparseFactor::row_counts`]), for the ladder's
     /// [`ldlt_error_floor`].
     row_counts: Vec<u32>,
-    /// Position of each diagonal entry of W̃ in the upper-triangle entry list.
-    diagonal: Vec<usize>,
     /// W̃'s upper triangle, shared with the problem
     /// ([`crate::problem::matrix::PoseGraphMatrix::upper`]).
     upper: Arc<SparseColMat<usize, c64>>,
@@ -53,8 +51,6 @@ pub struct SparseCertifier {
     pub factorizations: usize,
     /// What the last successful [`Self::gap`] found, where the next one starts looking.
     shifts: ShiftMemory,
-    /// The fill-reducing order of the rows.
-    order: Vec<usize>,
     /// Whether the last [`Self::certify_rank_one`] isolated one eigenvalue of W̃(λ) (whatever
     /// Temple's inequality then made of it).
     pub isolated: bool,
@@ -93,31 +89,34 @@ impl SparseCertifier {
         4.0 * self.factor.multiply_adds()
     }
 
+    /// The dimension of W̃.
+    fn dim(&self) -> usize {
+        self.upper.ncols()
+    }
+
+    /// The position of W̃'s k-th diagonal entry among its stored values: the last of column k,
+    /// as W̃'s upper triangle stores every diagonal entry and each column's rows ascending
+    /// ([`crate::problem::matrix::PoseGraphMatrix::upper`]).
+    fn diagonal(&self, k: usize) -> usize {
+        let at = self.upper.symbolic().col_ptr()[k + 1] - 1;
+        debug_assert_eq!(self.upper.symbolic().row_idx()[at], k);
+        at
+    }
+
     /// Analyzes the pattern of W̃ (its upper triangle, diagonal included, as in
     /// [`crate::problem::matrix::PoseGraphMatrix::upper`]) once, rows in a fill-reducing
     /// `order`; every later certificate reuses it.
     pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
-        let dim = upper.ncols();
         let factor = SparseFactor::analyze_ordered(upper.symbolic(), order, Layout::AutoComplex);
-        let mut diagonal = vec![usize::MAX; dim];
-        let mut k = 0;
-        for_each_entry(upper, |r, c, _| {
-            if r == c {
-                diagonal[r] = k;
-            }
-            k += 1;
-        });
         SparseCertifier {
             values: Vec::new(),
             row_counts: factor.row_counts(),
             factor,
-            diagonal,
             upper: Arc::clone(upper),
             factorizations: 0,
             shifts: ShiftMemory::default(),
             last_gap: None,
             last_enclosure: None,
-            order: order.to_vec(),
             isolated: false,
             precise: None,
         }
@@ -142,10 +141,8 @@ impl SparseCertifier {
                     / (d * d)
             })
             .sum();
-        let max_w = self
-            .diagonal
-            .iter()
-            .fold(0.0f64, |m, &k| m.max(self.upper.val()[k].re));
+        let max_w =
+            (0..self.dim()).fold(0.0f64, |m, k| m.max(self.upper.val()[self.diagonal(k)].re));
         (alpha * weight / lambda.len() as f64)
             .max(1e-15 * max_w)
             .max(f64::MIN_POSITIVE)
@@ -226,7 +223,7 @@ impl SparseCertifier {
         lambda: &[f64],
         eta_max: f64,
     ) -> Option<SparseBound> {
-        if x.p != 1 || x.x.len() != self.diagonal.len() {
+        if x.p != 1 || x.x.len() != self.dim() {
             return None;
         }
         self.isolated = false;
@@ -270,13 +267,13 @@ impl SparseCertifier {
         eta_max: f64,
         slack: f64,
     ) -> bool {
-        if x.p != 1 || x.x.len() != self.diagonal.len() {
+        if x.p != 1 || x.x.len() != self.dim() {
             return false;
         }
         let Some((_, scale)) = self.scaling(lambda, 0.0, true) else {
             return false;
         };
-        let theta = self.shifts.start(1, self.diagonal.len() / 2);
+        let theta = self.shifts.start(1, self.dim() / 2);
         self.temple_eta(problem, x, lambda, &scale, theta, eta_max)
             .is_none_or(|eta| cost - dual_value(lambda, eta) > slack)
     }
@@ -335,7 +332,7 @@ impl SparseCertifier {
         scale: &[f64],
     ) -> Option<Gap> {
         let assembly = assembly_error(problem, scale);
-        let start = self.shifts.start(1, self.diagonal.len() / 2);
+        let start = self.shifts.start(1, self.dim() / 2);
         let floor = ldlt_error_floor(&self.row_counts, &self.abs_row_sums(a, scale));
         let ladder = isolate(1, start, assembly, floor, |mu| {
             self.inertia_at(lambda, scale, mu)
@@ -389,7 +386,7 @@ impl SparseCertifier {
         scale: &[f64],
         mu: f64,
     ) -> Option<Option<(usize, f64)>> {
-        let rot0 = self.diagonal.len() - lambda.len();
+        let rot0 = self.dim() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
         let mut finite = true;
         self.write(|r, c, v| {
@@ -427,7 +424,7 @@ impl SparseCertifier {
         mut mu: f64,
         assembly: f64,
     ) -> Option<Gap> {
-        let dim = self.diagonal.len();
+        let dim = self.dim();
         let rot0 = dim - lambda.len();
         // Double-double runs column by column (faer's blocked kernels need SIMD support it lacks)
         // at some 30x the cost of double precision: beyond ~10⁷ factor entries (320 MB, tens of
@@ -439,7 +436,7 @@ impl SparseCertifier {
             let assembly = Assembly::<cx128>::new(dim, &entry_pattern(&self.upper));
             let factor = SparseFactor::analyze_ordered(
                 assembly.matrix.symbolic(),
-                &self.order,
+                &self.factor.order(),
                 Layout::Simplicial,
             );
             (assembly, factor)
@@ -499,12 +496,12 @@ impl SparseCertifier {
     /// power-of-two scaling D_k = 2^{−⌊log₂(a_k)/2⌋} that puts D_k² a_k in [1, 4). `None` if a
     /// diagonal entry is not positive (then W̃(λ) + ηP is not PSD).
     fn scaling(&self, lambda: &[f64], eta: f64, absolute: bool) -> Option<(Vec<f64>, Vec<f64>)> {
-        let dim = self.diagonal.len();
+        let dim = self.dim();
         let rot0 = dim - lambda.len();
         let mut a = vec![0.0; dim];
         let mut scale = vec![0.0; dim];
         for k in 0..dim {
-            let w = self.upper.val()[self.diagonal[k]].re;
+            let w = self.upper.val()[self.diagonal(k)].re;
             let v = if k >= rot0 {
                 w - lambda[k - rot0] + eta
             } else {
@@ -530,7 +527,7 @@ impl SparseCertifier {
             .abs_row_sums(a, scale)
             .iter()
             .fold(0.0f64, |m, &v| m.max(v));
-        self.diagonal.len() as f64 * (f64::EPSILON / 2.0) * norm
+        self.dim() as f64 * (f64::EPSILON / 2.0) * norm
     }
 
     /// The row sums of |B| for B = D(W̃(λ) + ηP)D, the diagonal's moduli `a` and `scale` from
@@ -549,7 +546,7 @@ impl SparseCertifier {
 
     /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Whether it succeeded.
     fn try_eta(&mut self, lambda: &[f64], eta: f64) -> bool {
-        let dim = self.diagonal.len();
+        let dim = self.dim();
         let rot0 = dim - lambda.len();
         let Some((a, scale)) = self.scaling(lambda, eta, false) else {
             return false;
@@ -558,7 +555,7 @@ impl SparseCertifier {
         let mut alpha = base;
         // Plus the rounding of each a_kk itself (two additions), in equilibrated units.
         for k in rot0..dim {
-            let w = self.upper.val()[self.diagonal[k]].re;
+            let w = self.upper.val()[self.diagonal(k)].re;
             let magnitude = w + lambda[k - rot0].abs() + eta;
             alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
@@ -602,7 +599,7 @@ impl SparseCertifier {
     }
 
     fn fill_shifted(&mut self, lambda: &[f64], threshold: f64) {
-        let dim = self.diagonal.len();
+        let dim = self.dim();
         let rot0 = dim - lambda.len();
         self.write(|r, c, v| {
             if r == c {

@@ -729,7 +729,90 @@ impl Scalar for faer::c64 {
 pub struct Assembly<T> {
     /// The matrix (upper triangle), values rewritten by [`Assembly::fill`].
     pub matrix: SparseColMat<usize, T>,
-    slots: Vec<usize>,
+    slots: Slots,
+}
+
+/// Each contribution's entry of an [`Assembly`]: 32-bit for a matrix of fewer than 2³² entries,
+/// 64-bit beyond. At 10⁶ planar poses the Newton system's 16·10⁶ slots took 125 MiB as 64-bit
+/// ones, at its peak of memory.
+#[derive(Debug, PartialEq)]
+enum Slots {
+    Narrow(Vec<u32>),
+    Wide(Vec<usize>),
+}
+
+impl Slots {
+    /// Room for `len` slots into a matrix of at most `entries` entries.
+    fn with_capacity(len: usize, entries: usize) -> Self {
+        if u32::try_from(entries).is_ok() {
+            Slots::Narrow(Vec::with_capacity(len))
+        } else {
+            Slots::Wide(Vec::with_capacity(len))
+        }
+    }
+
+    /// `len` slots, each 0 until [`Self::set`], into a matrix of at most `entries` entries.
+    fn zeroed(len: usize, entries: usize) -> Self {
+        if u32::try_from(entries).is_ok() {
+            Slots::Narrow(vec![0; len])
+        } else {
+            Slots::Wide(vec![0; len])
+        }
+    }
+
+    /// Appends a slot (below the `entries` given at creation).
+    fn push(&mut self, at: usize) {
+        match self {
+            Slots::Narrow(v) => v.push(at as u32),
+            Slots::Wide(v) => v.push(at),
+        }
+    }
+
+    /// Sets slot k (below the `entries` given at creation).
+    fn set(&mut self, k: usize, at: usize) {
+        match self {
+            Slots::Narrow(v) => v[k] = at as u32,
+            Slots::Wide(v) => v[k] = at,
+        }
+    }
+
+    /// Replaces each slot s with `moved[s]`.
+    fn relocate(&mut self, moved: &[usize]) {
+        match self {
+            Slots::Narrow(v) => v.iter_mut().for_each(|s| *s = moved[*s as usize] as u32),
+            Slots::Wide(v) => v.iter_mut().for_each(|s| *s = moved[*s]),
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Slots::Narrow(v) => v.len(),
+            Slots::Wide(v) => v.len(),
+        }
+    }
+
+    fn iter(&self) -> SlotIter<'_> {
+        match self {
+            Slots::Narrow(v) => SlotIter::Narrow(v.iter()),
+            Slots::Wide(v) => SlotIter::Wide(v.iter()),
+        }
+    }
+}
+
+/// The slots of an [`Assembly::fill_with`], in the pattern's order.
+enum SlotIter<'a> {
+    Narrow(std::slice::Iter<'a, u32>),
+    Wide(std::slice::Iter<'a, usize>),
+}
+
+impl SlotIter<'_> {
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        match self {
+            SlotIter::Narrow(i) => i.next().map(|&s| s as usize),
+            SlotIter::Wide(i) => i.next().copied(),
+        }
+    }
 }
 
 impl<T: Scalar> Assembly<T> {
@@ -881,7 +964,17 @@ impl<T: Scalar> Assembly<T> {
             }
         }
         // Each entry's slot, in the entries' order.
-        let mut slots = Vec::new();
+        let contributions = blocks
+            .iter()
+            .map(|&(u, v)| {
+                if u == v {
+                    sizes[u] * (sizes[u] + 1) / 2
+                } else {
+                    sizes[u] * sizes[v]
+                }
+            })
+            .sum();
+        let mut slots = Slots::with_capacity(contributions, row_idx.len());
         for (k, &(u, v)) in blocks.iter().enumerate() {
             let (r, c) = stored(&(u, v));
             let diagonal_block = u == v;
@@ -927,7 +1020,7 @@ impl<T: Scalar> Assembly<T> {
         let mut by_column: Vec<(usize, usize)> = order.iter().map(|&k| (entries[k].0, k)).collect();
         let mut col_ptr = Vec::with_capacity(dim + 1);
         let mut row_idx = Vec::with_capacity(entries.len());
-        let mut slots = vec![0usize; entries.len()];
+        let mut slots = Slots::zeroed(entries.len(), entries.len());
         col_ptr.push(0);
         for c in 0..dim {
             let bucket = &mut by_column[start[c]..start[c + 1]];
@@ -936,7 +1029,7 @@ impl<T: Scalar> Assembly<T> {
                 if row_idx.len() == col_ptr[c] || row_idx.last() != Some(&r) {
                     row_idx.push(r);
                 }
-                slots[k] = row_idx.len() - 1;
+                slots.set(k, row_idx.len() - 1);
             }
             col_ptr.push(row_idx.len());
         }
@@ -976,9 +1069,7 @@ impl<T: Scalar> Assembly<T> {
             }
         }
         drop(symbolic);
-        for s in &mut slots {
-            *s = moved[*s];
-        }
+        slots.relocate(&moved);
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, new_ptr, None, new_row);
         Assembly {
             matrix: SparseColMat::new(symbolic, values),
@@ -1013,14 +1104,14 @@ impl<T: Scalar> Assembly<T> {
 /// The values of an [`Assembly::fill_with`], received in the pattern's order.
 pub struct Fill<'a, T> {
     out: &'a mut [T],
-    slots: std::slice::Iter<'a, usize>,
+    slots: SlotIter<'a>,
 }
 
 impl<T: Scalar> Fill<'_, T> {
     /// The value of the next entry of the pattern (added to its slot).
     #[inline]
     pub fn push(&mut self, value: T) {
-        let s = *self
+        let s = self
             .slots
             .next()
             .expect("Assembly::fill_with: more values than the pattern's entries");
@@ -1346,6 +1437,49 @@ mod tests {
 
     /// `group_ordering` is the rows sorted by (rank of their pose, row), on random ranks and
     /// groupings (poses with no row, one or several, rows of a pose not adjacent).
+    /// The 32-bit and 64-bit slots hold the same indices through every operation, against a
+    /// plain list kept beside them: pushed, set, relocated by a permutation, read back in order.
+    #[test]
+    fn narrow_and_wide_slots_agree() {
+        let mut rng = crate::linalg::rng::Rng::new(7);
+        let mut below = |m: usize| (rng.next_u64() % m as u64) as usize;
+        let n = 200;
+        let mut plain: Vec<usize> = (0..n).map(|_| below(n)).collect();
+        let mut narrow = Slots::Narrow(Vec::new());
+        let mut wide = Slots::Wide(Vec::new());
+        for &s in &plain {
+            narrow.push(s);
+            wide.push(s);
+        }
+        for _ in 0..50 {
+            let (k, at) = (below(n), below(n));
+            plain[k] = at;
+            narrow.set(k, at);
+            wide.set(k, at);
+        }
+        let mut moved: Vec<usize> = (0..n).collect();
+        for k in (1..n).rev() {
+            moved.swap(k, below(k + 1));
+        }
+        plain.iter_mut().for_each(|s| *s = moved[*s]);
+        narrow.relocate(&moved);
+        wide.relocate(&moved);
+        for slots in [&narrow, &wide] {
+            assert_eq!(slots.len(), n);
+            let mut it = slots.iter();
+            let read: Vec<usize> = std::iter::from_fn(|| it.next()).collect();
+            assert_eq!(read, plain);
+        }
+        assert!(matches!(
+            Slots::with_capacity(3, u32::MAX as usize),
+            Slots::Narrow(_)
+        ));
+        assert!(matches!(
+            Slots::zeroed(3, u32::MAX as usize + 1),
+            Slots::Wide(_)
+        ));
+    }
+
     #[test]
     fn group_ordering_sorts_rows_by_pose_rank_then_row() {
         let mut rng = crate::linalg::rng::Rng::new(31);
