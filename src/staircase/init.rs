@@ -7,7 +7,7 @@
 //! - Positions optimal for given rotations: ρ̃ = −L⁻¹ S̃ r̃ (eq. (24)), by a sparse Cholesky of the
 //!   anchored Laplacian L.
 
-use crate::linalg::factor::{Assembly, Layout, SparseFactor};
+use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor};
 use crate::problem::rank_p::{Point, Problem};
 use faer::c64;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -139,13 +139,13 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
 
 /// The LLᴴ of a `dim` x `dim` Hermitian matrix (upper-triangle entries, duplicates summed), in
 /// the given fill-reducing order. `None` if it is not numerically positive definite.
-fn anchored_llt(
+fn anchored_llt<T: Scalar>(
     dim: usize,
     order: &[usize],
     entries: &[(usize, usize)],
-    values: &[c64],
-) -> Option<SparseFactor<c64>> {
-    let mut assembly = Assembly::<c64>::new(dim, entries);
+    values: &[T],
+) -> Option<SparseFactor<T>> {
+    let mut assembly = Assembly::<T>::new(dim, entries);
     assembly.fill(values);
     let mut factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
     if dim > 0 {
@@ -172,7 +172,9 @@ pub fn with_optimal_positions(problem: &Problem, r: &[c64]) -> Option<Point> {
 /// rank-p point, with one Cholesky factorization of the anchored Laplacian L for every call (L
 /// depends on the graph and τ only).
 pub struct OptimalPositions {
-    factor: SparseFactor<c64>,
+    /// L's LLᵀ, real (a complex one of the same real matrix took twice the memory: 111 MiB at
+    /// 10⁶ poses).
+    factor: SparseFactor<f64>,
 }
 
 impl OptimalPositions {
@@ -182,7 +184,7 @@ impl OptimalPositions {
         let mut entries = Vec::with_capacity(3 * problem.terms.len());
         let mut values = Vec::with_capacity(3 * problem.terms.len());
         for t in &problem.terms {
-            let tau = c64::new(t.tau, 0.0);
+            let tau = t.tau;
             let (i, j) = (problem.position_row(t.i), problem.head_position_row(t));
             for a in [i, j].into_iter().flatten() {
                 entries.push((a, a));
@@ -198,7 +200,7 @@ impl OptimalPositions {
         // Every pose's diagonal, so that a pose without edges makes L singular, not malformed.
         for a in 0..problem.positions() {
             entries.push((a, a));
-            values.push(c64::new(0.0, 0.0));
+            values.push(0.0);
         }
         let mut factor = anchored_llt(
             problem.positions(),
@@ -217,17 +219,20 @@ impl OptimalPositions {
         if positions == 0 {
             return;
         }
-        // At ρ̃ = 0 the position rows of W̃x̃ are S̃r̃; then ρ̃ = −L⁻¹S̃r̃.
+        // At ρ̃ = 0 the position rows of W̃x̃ are S̃r̃; then ρ̃ = −L⁻¹S̃r̃, L real: the real and
+        // imaginary parts of each column are solved together, in one pass over L's factor.
         x.x[..positions * p].fill(c64::new(0.0, 0.0));
-        let g = problem.half_gradient(x);
-        let mut rhs = vec![c64::new(0.0, 0.0); positions];
+        let g = problem.position_half_gradient(x);
+        let mut rhs = faer::Mat::<f64>::zeros(positions, 2);
         for c in 0..p {
-            for (k, v) in rhs.iter_mut().enumerate() {
-                *v = -g[k * p + c];
+            for k in 0..positions {
+                let v = -g[k * p + c];
+                rhs[(k, 0)] = v.re;
+                rhs[(k, 1)] = v.im;
             }
-            self.factor.solve_in_place(&mut rhs);
-            for (k, v) in rhs.iter().enumerate() {
-                x.x[k * p + c] = *v;
+            self.factor.solve_block_in_place(rhs.as_mut());
+            for k in 0..positions {
+                x.x[k * p + c] = c64::new(rhs[(k, 0)], rhs[(k, 1)]);
             }
         }
     }
