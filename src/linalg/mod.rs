@@ -3,12 +3,14 @@
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
 //! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
 //! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
-//! side on two cores with the same bits as on one ([`parallel`]).
+//! side on two cores with the same bits as on one ([`parallel`]), and the allocator's free memory
+//! given back between phases ([`heap`]).
 //!
-//! May use: faer and the standard library only; nothing else of pgo.
+//! May use: faer, libc (the allocator) and the standard library only; nothing else of pgo.
 
 pub mod eigen;
 pub mod factor;
+pub mod heap;
 pub mod parallel;
 pub mod rng;
 pub mod roundoff;

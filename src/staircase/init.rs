@@ -219,22 +219,31 @@ impl OptimalPositions {
         if positions == 0 {
             return;
         }
-        // At ρ̃ = 0 the position rows of W̃x̃ are S̃r̃; then ρ̃ = −L⁻¹S̃r̃, L real: the real and
-        // imaginary parts of each column are solved together, in one pass over L's factor.
+        // At ρ̃ = 0 the position rows of W̃x̃ are S̃r̃; then ρ̃ = −L⁻¹S̃r̃, solved in place in
+        // −S̃r̃'s own memory. L is real: the real and imaginary parts of each column c (in the
+        // row-major positions x p layout, as pairs of f64) are a positions x 2 real matrix of
+        // row stride 2p, both solved in one pass over L's factor.
         x.x[..positions * p].fill(c64::new(0.0, 0.0));
-        let g = problem.position_half_gradient(x);
-        let mut rhs = faer::Mat::<f64>::zeros(positions, 2);
+        let mut g = problem.position_half_gradient(x);
+        g.iter_mut().for_each(|v| *v = -*v);
+        let parts: &mut [f64] = bytemuck::cast_slice_mut(&mut g);
+        let stride = isize::try_from(2 * p).expect("a rank that fits memory");
         for c in 0..p {
-            for k in 0..positions {
-                let v = -g[k * p + c];
-                rhs[(k, 0)] = v.re;
-                rhs[(k, 1)] = v.im;
-            }
-            self.factor.solve_block_in_place(rhs.as_mut());
-            for k in 0..positions {
-                x.x[k * p + c] = c64::new(rhs[(k, 0)], rhs[(k, 1)]);
-            }
+            // SAFETY: entry (k, j) of column c's matrix is parts[2c + 2p·k + j], k < positions,
+            // j < 2: at most 2c + 2p(positions − 1) + 1 < 2p·positions = parts.len() (c < p);
+            // the entries are distinct, and `parts` is borrowed mutably for the view's life.
+            let rhs = unsafe {
+                faer::MatMut::from_raw_parts_mut(
+                    parts.as_mut_ptr().add(2 * c),
+                    positions,
+                    2,
+                    stride,
+                    1,
+                )
+            };
+            self.factor.solve_block_in_place(rhs);
         }
+        x.x[..positions * p].copy_from_slice(&g);
     }
 }
 

@@ -367,8 +367,10 @@ impl NewtonSystem {
     }
 
     /// Numeric LLᵀ of the last [`NewtonSystem::update`]; `Err` if H + μD is not numerically
-    /// positive definite.
+    /// positive definite. On large systems the steps' freed vectors go back to the system first:
+    /// the Newton steps hold the solve's peak of memory ([`crate::linalg::heap::release_for`]).
     pub fn factorize(&mut self) -> Result<(), NotFactorable> {
+        crate::linalg::heap::release_for(self.factor.dim());
         self.factor.llt(self.assembly.matrix.as_ref())
     }
 

@@ -838,6 +838,9 @@ fn solve_from_start(
         eta_max(l.cost).max(64.0 * certifier.resolution(&l.lambda, &l.point.x, 1))
     };
     let mut reach_1 = reach(&certifier, &local);
+    // On large graphs what the Newton steps freed goes back before the forecast's enclosure and
+    // the polish, the Newton system still held ([`crate::linalg::heap::release_for`]).
+    crate::linalg::heap::release_for(local.point.x.len());
     // Where even a gap as large as the ladder's first shift leaves Temple's bound short of the
     // tolerance, the residual of Newton's cost-based stopping rule is polished away before the
     // certificate's first factorization instead of after it (below).
