@@ -490,7 +490,6 @@ fn optimize_in(
     let weight_scale: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
     let cost = problem.cost(&start);
     let mut at = Iterate::new(problem, start, cost);
-    let damping = at.basis.damping(problem);
     if system.is_none() {
         *system = arriving();
     }
@@ -535,11 +534,7 @@ fn optimize_in(
         // point just left finds that last step as well as a new one would (the Hessian moved by
         // the length of that step). Its model decrease takes δᵀHδ at the current point.
         // δ = −(the last factorization)⁻¹ g.
-        let direction = |system: &mut NewtonSystem| {
-            let mut delta: Vec<f64> = at.grad.iter().map(|v| -v).collect();
-            system.solve_in_place(&mut delta);
-            delta
-        };
+        let direction = |system: &mut NewtonSystem| system.solve(|k| -at.grad[k]);
         let chord = std::mem::take(&mut chord_next)
             .then(|| {
                 let delta = direction(system);
@@ -567,7 +562,7 @@ fn optimize_in(
         // The model's decrease along αδ: m(0) − m(αδ) = −α gᵀδ − ½α² δᵀHδ, where (H + μD)δ = −g
         // gives δᵀHδ = −gᵀδ − μ δᵀDδ.
         let gd: f64 = at.grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
-        let dd: f64 = damping.iter().zip(&delta).map(|(a, b)| a * b * b).sum();
+        let dd = at.basis.damped_square(problem, &delta);
         let predicted_at = |alpha: f64| match chord_curvature {
             Some(dhd) => -alpha * gd - 0.5 * alpha * alpha * dhd,
             None => alpha * (1.0 - 0.5 * alpha) * -gd + 0.5 * alpha * alpha * mu * dd,
@@ -668,7 +663,10 @@ impl Iterate {
         let g = problem.half_gradient(&x);
         let lambda = problem.multipliers(&x, &g);
         let basis = TangentBasis::new(problem, &x);
-        let grad = basis.coordinates(&g).iter().map(|v| 2.0 * v).collect();
+        // Twice the half gradient's coordinates, doubled where they are (one vector of the
+        // basis's dimension, not two).
+        let mut grad = basis.coordinates(&g);
+        grad.iter_mut().for_each(|v| *v *= 2.0);
         Iterate {
             x,
             cost,
@@ -711,8 +709,7 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
             }
         }
         // (H + μD)δ = −2Bᵀg: the Riemannian gradient is twice the half gradient's coordinates.
-        let mut delta: Vec<f64> = grad.iter().map(|v| -2.0 * v).collect();
-        system.solve_in_place(&mut delta);
+        let delta = system.solve(|k| -2.0 * grad[k]);
         let trial = basis.retract(&local.point, &delta, problem.positions());
         let cost = problem.cost(&trial);
         let g_trial = problem.half_gradient(&trial);
