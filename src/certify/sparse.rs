@@ -1,7 +1,7 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
-use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor, ldlt_error_floor};
+use crate::linalg::factor::{Layout, Scalar, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
-use crate::problem::matrix::{entry_pattern, for_each_entry};
+use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::sparse::SparseColMat;
 use faer::{c64, cx128, fx128};
@@ -54,8 +54,9 @@ pub struct SparseCertifier {
     /// Whether the last [`Self::certify_rank_one`] isolated one eigenvalue of W̃(λ) (whatever
     /// Temple's inequality then made of it).
     pub isolated: bool,
-    /// The pattern again in double-double, built on first need ([`Self::precise_gap`]).
-    precise: Option<(Assembly<cx128>, SparseFactor<cx128>)>,
+    /// The analysis of W̃'s pattern for the double-double LDLᴴ, built on first need
+    /// ([`Self::precise_gap`]).
+    precise: Option<SparseFactor<cx128>>,
     /// The last λ [`Self::gap`] was asked about (bit for bit) and its answer: the inertia depends
     /// on λ alone, and a staircase that stops at rank 1 asks twice (the certificate, then the
     /// bound), each time a ladder of factorizations (on city10000 with 1000 false loop closures
@@ -432,14 +433,12 @@ impl SparseCertifier {
         if self.precise.is_none() && self.factor.stored_entries() > PRECISE_MAX_ENTRIES {
             return None;
         }
-        let (precise, factor) = self.precise.get_or_insert_with(|| {
-            let assembly = Assembly::<cx128>::new(dim, &entry_pattern(&self.upper));
-            let factor = SparseFactor::analyze_ordered(
-                assembly.matrix.symbolic(),
+        let factor = self.precise.get_or_insert_with(|| {
+            SparseFactor::analyze_ordered(
+                self.upper.symbolic(),
                 &self.factor.order(),
                 Layout::Simplicial,
-            );
-            (assembly, factor)
+            )
         });
         let dd = |v: f64| fx128::from_f64(v);
         let u = <cx128 as crate::linalg::factor::Scalar>::UNIT_ROUNDOFF;
@@ -449,7 +448,7 @@ impl SparseCertifier {
             values.clear();
             for_each_entry(&self.upper, |r, c, v| {
                 let s = scale[r] * scale[c];
-                values.push(if r == c {
+                values.push(added_to_zero(if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
                     form = form.max(4.0 * u * ((v.re.abs() + l.abs()) * s + mu));
                     cx128 {
@@ -461,11 +460,10 @@ impl SparseCertifier {
                         re: dd(v.re * s),
                         im: dd(v.im * s),
                     }
-                });
+                }));
             });
-            precise.fill(&values);
             self.factorizations += 1;
-            if factor.ldlt(precise.matrix.as_ref()).is_ok() {
+            if factor.ldlt(matrix(&self.upper, &values)).is_ok() {
                 let negative = factor.inertia_below(0.0);
                 if negative <= 1 {
                     let theta = mu - factor.ldlt_backward_error() - assembly - form;
@@ -612,24 +610,32 @@ impl SparseCertifier {
     }
 
     /// Writes the values of the next matrix to factor, `value(row, column, W̃'s entry)` for each
-    /// entry of W̃'s upper triangle in its stored order ([`for_each_entry`]). Each is added to
-    /// a zero, as an [`Assembly`] adds it to its slot (so a −0 is stored as +0, bit for bit as
-    /// before).
+    /// entry of W̃'s upper triangle in its stored order ([`for_each_entry`]).
     fn write(&mut self, mut value: impl FnMut(usize, usize, c64) -> c64) {
         let values = &mut self.values;
         values.clear();
         values.reserve_exact(self.upper.val().len());
         for_each_entry(&self.upper, |r, c, v| {
-            values.push(c64::new(0.0, 0.0) + value(r, c, v))
+            values.push(added_to_zero(value(r, c, v)))
         });
     }
 }
 
-/// The matrix of W̃'s pattern (`upper`) with `values` ([`SparseCertifier::write`]).
-fn matrix<'a>(
+/// `v` added to a zero, as an assembly adds each value to its zeroed slot
+/// ([`crate::linalg::factor::Assembly::fill`]): a −0 is stored as +0, so the matrices factored
+/// in W̃'s own pattern hold the same bits as when they were assembled.
+fn added_to_zero<T: Scalar>(v: T) -> T {
+    let mut zero = T::zero_impl();
+    zero += v;
+    zero
+}
+
+/// The matrix of W̃'s pattern (`upper`) with `values` in its stored order
+/// ([`SparseCertifier::write`], [`SparseCertifier::precise_gap`]).
+fn matrix<'a, T>(
     upper: &'a SparseColMat<usize, c64>,
-    values: &'a [c64],
-) -> faer::sparse::SparseColMatRef<'a, usize, c64> {
+    values: &'a [T],
+) -> faer::sparse::SparseColMatRef<'a, usize, T> {
     faer::sparse::SparseColMatRef::new(upper.symbolic(), values)
 }
 
