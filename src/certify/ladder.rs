@@ -122,9 +122,10 @@ pub enum Ladder {
         /// The lowest shift tried with more than k below it, if any.
         above: Option<f64>,
     },
-    /// At most k pivots are negative at μ, but the rounding hides the gap there (the caller may
-    /// retry in higher precision).
-    Hidden { mu: f64 },
+    /// At most k pivots are negative at μ, but the rounding hides the gap there: the error bound
+    /// `floor` (the factorization's backward error plus `assembly`) is at least μ (the caller
+    /// may retry in higher precision).
+    Hidden { mu: f64, floor: f64 },
     /// No shift isolates k eigenvalues, or a factorization could not be formed.
     Failed,
 }
@@ -161,7 +162,7 @@ pub fn isolate(
     // The lowest shift with more than k negative pivots, and the last with at most k where the
     // rounding hid the gap.
     let mut above: Option<f64> = None;
-    let mut hidden: Option<f64> = None;
+    let mut hidden: Option<(f64, f64)> = None;
     for _ in 0..8 {
         match rung(k, mu, assembly, &mut inertia) {
             Rung::Proven { theta, negative } => {
@@ -174,14 +175,14 @@ pub fn isolate(
             }
             Rung::Failed => return Ladder::Failed,
             Rung::Hidden { floor } => {
-                hidden = Some(mu);
+                hidden = Some((mu, floor));
                 match above {
                     // λ_{k+1} may lie well above μ: try higher first, at twice the level the
                     // rounding showed (θ = μ − floor then is that level), up by 64 at most.
                     None if mu < CEILING => {
                         mu = (2.0 * floor).clamp(2.0 * mu, 64.0 * mu).min(CEILING)
                     }
-                    _ => return bisect(k, mu, above, assembly, &mut inertia),
+                    _ => return bisect(k, (mu, floor), above, assembly, &mut inertia),
                 }
                 continue;
             }
@@ -200,7 +201,7 @@ pub fn isolate(
         }
     }
     match hidden {
-        Some(mu) => Ladder::Hidden { mu },
+        Some((mu, floor)) => Ladder::Hidden { mu, floor },
         None => Ladder::Failed,
     }
 }
@@ -241,16 +242,18 @@ fn rung(
     }
 }
 
-/// Three log-scale bisections between `mu` (at most k negative pivots, the gap hidden by the
-/// rounding) and the shift `above` it with more than k, if any: the first midpoint where the
-/// gap shows, else [`Ladder::Hidden`] at the highest shift with at most k.
+/// Three log-scale bisections between `hidden` (a shift with at most k negative pivots, the gap
+/// hidden by the rounding, and its error bound) and the shift `above` it with more than k, if
+/// any: the first midpoint where the gap shows, else [`Ladder::Hidden`] at the highest shift
+/// with at most k.
 fn bisect(
     k: usize,
-    mut mu: f64,
+    hidden: (f64, f64),
     mut above: Option<f64>,
     assembly: f64,
     inertia: &mut impl FnMut(f64) -> Option<Option<(usize, f64)>>,
 ) -> Ladder {
+    let (mut mu, mut floor) = hidden;
     if let Some(mut hi) = above {
         for _ in 0..3 {
             let mid = (mu * hi).sqrt();
@@ -264,7 +267,7 @@ fn bisect(
                     };
                 }
                 Rung::Failed => return Ladder::Failed,
-                Rung::Hidden { .. } => mu = mid,
+                Rung::Hidden { floor: f } => (mu, floor) = (mid, f),
                 Rung::Above { .. } => {
                     hi = mid;
                     above = Some(mid);
@@ -272,7 +275,7 @@ fn bisect(
             }
         }
     }
-    Ladder::Hidden { mu }
+    Ladder::Hidden { mu, floor }
 }
 
 #[cfg(test)]
@@ -325,8 +328,16 @@ mod tests {
         }
         // With k = 1 the same matrix never isolates: three are at zero.
         assert_eq!(ladder(&eig, 1, 1e-9).0, Ladder::Failed);
-        // An error above the shift: the gap is hidden.
-        assert!(matches!(ladder(&eig, 3, 1.0).0, Ladder::Hidden { .. }));
+        // An error above the shift: the gap is hidden, reported with that error (the last
+        // shift tried with at most 3 below; here the error holds at every shift).
+        let (l, shifts) = ladder(&eig, 3, 1.0);
+        match l {
+            Ladder::Hidden { mu, floor } => {
+                assert_eq!(floor, 1.0);
+                assert!(shifts.contains(&mu) && eig.iter().filter(|&&e| e < mu).count() <= 3);
+            }
+            other => panic!("{other:?}"),
+        }
         assert!((power_of_two_scale(10.0).powi(2) * 10.0 - 2.5).abs() < 1e-15);
     }
 
@@ -414,7 +425,10 @@ mod tests {
         assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
         // A failed or hidden ladder leaves the memory; a large shift is capped at 1/16.
         memory.remember(&Ladder::Failed);
-        memory.remember(&Ladder::Hidden { mu: 1.0 });
+        memory.remember(&Ladder::Hidden {
+            mu: 1.0,
+            floor: 2.0,
+        });
         assert_eq!(memory.start(1, 10_000), 0.5f64.powi(14));
         memory.remember(&found(0.5f64.powi(8), None));
         assert_eq!(memory.start(3, 10), 1.0 / 16.0);

@@ -14,4 +14,4 @@ pub mod sparse;
 pub mod szep;
 
 pub use dense::{DualBound, dual_bound};
-pub use sparse::{SparseBound, SparseCertifier};
+pub use sparse::{HiddenGap, SparseBound, SparseCertifier};

@@ -974,6 +974,9 @@ fn text_report(input: &str, report: &Report) -> String {
         "SZEP",
         if r.szep {
             "yes".to_string()
+        } else if r.near_zero_eigenvalues == 0 {
+            // Not counted: no certificate was attempted, or the rounding hid the gap.
+            "not established".to_string()
         } else {
             format!(
                 "no ({} eigenvalues of W(lambda*) at zero)",

@@ -606,7 +606,9 @@ fn reason(
                 "SZEP fails: {k} near-zero eigenvalues of W(lambda)"
             ));
         }
-        if s.bound.is_none() {
+        if let Some(h) = &s.hidden_gap {
+            why.push(hidden_gap_reason(h));
+        } else if s.bound.is_none() {
             why.push(format!("staircase: no certificate up to rank {}", s.rank));
         }
         if s.limit_reached {
@@ -624,6 +626,24 @@ fn reason(
         why.push("the gap to the bound exceeds the tolerance".to_string());
     }
     why.join("; ")
+}
+
+/// Why a hidden gap ([`crate::certify::HiddenGap`]) leaves the estimate uncertified: the SZEP
+/// is neither proven nor refuted at double precision's resolution.
+fn hidden_gap_reason(h: &crate::certify::HiddenGap) -> String {
+    let precise = match h.precise_limit {
+        Some(limit) => format!(
+            "the double-double retry is limited to {limit:.0e} factor entries and this factor has {:.1e}",
+            h.factor_entries as f64
+        ),
+        None => "double-double did not resolve it either".to_string(),
+    };
+    format!(
+        "SZEP unresolved: the second eigenvalue of W(lambda) is below the rounding of its \
+         factorization (equilibrated, at most one eigenvalue below {:.2e} but the error bound \
+         there is {:.2e}); {precise}",
+        h.shift, h.error
+    )
 }
 
 /// The lowest-cost estimate of every polished rounding of the methods that ran (see
