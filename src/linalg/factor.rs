@@ -393,6 +393,20 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
+    /// x with A x = b for a matrix assembled in an elimination `order` of its own (`order[new] =
+    /// old` coordinate, as [`block_coordinates`] gives), by the last successful factorization:
+    /// b's coordinate k is `b(k)`, gathered straight into that order and x scattered out of it,
+    /// so that no permuted vector outlives the solve (the Newton systems', planar and SE(3)).
+    pub fn solve_gathered(&mut self, order: &[usize], b: impl Fn(usize) -> T) -> Vec<T> {
+        let mut permuted: Vec<T> = order.iter().map(|&old| b(old)).collect();
+        self.solve_in_place(&mut permuted);
+        let mut x = vec![T::zero_impl(); permuted.len()];
+        for (p, &old) in permuted.into_iter().zip(order) {
+            x[old] = p;
+        }
+        x
+    }
+
     /// Solves A x = b in place with the last successful factorization.
     pub fn solve_in_place(&mut self, b: &mut [T]) {
         clear_upper_avx();

@@ -142,9 +142,8 @@ pub struct System {
     /// Index of the first value of each pair's block in the value list.
     diagonal: Vec<usize>,
     count: usize,
-    /// The elimination order (`order[new] = old` coordinate) and room for a permuted vector.
+    /// The elimination order (`order[new] = old` coordinate).
     order: Vec<usize>,
-    permuted: Vec<f64>,
 }
 
 impl System {
@@ -203,20 +202,14 @@ impl System {
             factor,
             diagonal,
             count,
-            permuted: vec![0.0; order.len()],
             order,
         }
     }
 
-    /// Solves the last factorization's system in place (coordinates in the pose order).
-    fn solve_in_place(&mut self, b: &mut [f64]) {
-        for (p, &old) in self.permuted.iter_mut().zip(&self.order) {
-            *p = b[old];
-        }
-        self.factor.solve_in_place(&mut self.permuted);
-        for (p, &old) in self.permuted.iter().zip(&self.order) {
-            b[old] = *p;
-        }
+    /// The solution of the last factorization's system for b, b's coordinate k given by `b(k)`
+    /// (coordinates in the pose order; [`SparseFactor::solve_gathered`]).
+    fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
+        self.factor.solve_gathered(&self.order, b)
     }
 
     fn dim(&self) -> usize {
@@ -562,8 +555,7 @@ pub fn optimize_with(
         // the model at x (its own Hessian) predicts along it, taken where that is at most
         // [`CHORD_TAKEN`]·f; otherwise a new factorization.
         let step = |sys: &mut System| {
-            let mut delta: Vec<f64> = grad.iter().map(|g| -g).collect();
-            sys.solve_in_place(&mut delta);
+            let delta = sys.solve(|k| -grad[k]);
             let predicted = model_decrease(problem, sys, &values, &grad, &delta);
             (delta, predicted)
         };

@@ -380,13 +380,7 @@ impl NewtonSystem {
     /// scattered out of it, so that between two solves the system holds no vector (at 10⁶ poses
     /// a kept right-hand side and its permuted copy were 46 MiB at the Newton steps' peak).
     pub fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        let mut permuted: Vec<f64> = self.order.iter().map(|&old| b(old)).collect();
-        self.factor.solve_in_place(&mut permuted);
-        let mut delta = vec![0.0; permuted.len()];
-        for (p, &old) in permuted.iter().zip(&self.order) {
-            delta[old] = *p;
-        }
-        delta
+        self.factor.solve_gathered(&self.order, b)
     }
 }
 
