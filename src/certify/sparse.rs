@@ -921,41 +921,61 @@ impl<'a> Rayleigh<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::problem::rank_p::Point;
     use crate::problem::weights::{Weights, edge_weights};
-    use crate::simulate::{SimulationConfig, simulate};
-    use crate::staircase::{StaircaseOptions, solve_anchored};
+    use crate::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
     use faer::{Mat, Side};
 
     /// The double-double gap ([`SparseCertifier::precise_gap`]), which no public file reaches (it
     /// runs where double precision's rounding hides the gap), held against the eigenvalues of
-    /// B = D W̃(λ) D from a dense eigendecomposition, at the certified optimum of a generated
-    /// graph (B's smallest eigenvalue at zero) and with its multipliers lowered by δ (W̃(λ − δ1)
-    /// = W̃(λ) + δ·blkdiag(0, I) ≻ 0). At shifts μ between B's eigenvalues its verdict must follow
-    /// the count of eigenvalues below μ: at most one below μ (or below μ/8, μ/64, its two
-    /// retries) proves θ ≤ μ with that count (Definite for none, Isolated for one), θ within the
-    /// rounding of μ; two or more below all three shifts prove nothing. The double-precision
-    /// LDLᴴ at the same shifts must count the same pivots.
+    /// B = D W̃(λ) D from a dense eigendecomposition, at the optimum of a generated graph without
+    /// noise (its ground truth, f = 0: B's smallest eigenvalue at zero) and with its multipliers
+    /// lowered by δ (W̃(λ − δ1) = W̃(λ) + δ·blkdiag(0, I) ≻ 0). At shifts μ between B's
+    /// eigenvalues its verdict must follow the count of eigenvalues below μ: at most one below μ
+    /// (or below μ/8, μ/64, its two retries) proves θ ≤ μ with that count (Definite for none,
+    /// Isolated for one), θ within the rounding of μ; two or more below all three shifts prove
+    /// nothing. The double-precision LDLᴴ at the same shifts must count the same pivots.
     #[test]
     fn the_double_double_gap_follows_the_dense_eigenvalues() {
         let sim = simulate(&SimulationConfig {
             n: 30,
             seed: 5,
             loop_probability: 0.2,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
             ..Default::default()
         });
         let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
-        let (s, anchored) =
-            solve_anchored(&sim.graph, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
-        let problem = &anchored.problem;
-        assert_eq!(s.point.p, 1, "the generated graph's relaxation is exact");
+        let problem = &Problem::new(&sim.graph, &w);
+        // The truth as a rank-1 point: positions relative to pose 0's, unit rotations.
+        let mut x = vec![c64::new(0.0, 0.0); problem.rows()];
+        let origin = &sim.truth[0];
+        for (k, pose) in sim.truth.iter().enumerate() {
+            if let Some(r) = problem.position_row(k) {
+                x[r] = c64::new(pose.x - origin.x, pose.y - origin.y);
+            }
+            x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
+        }
+        let point = Point { p: 1, x };
+        let weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
+        assert!(
+            problem.cost(&point) < 1e-20 * weight,
+            "the truth is not a zero of f"
+        );
+        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
         let mut certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
         let dim = certifier.dim();
-        let rot0 = dim - s.lambda.len();
-        let delta = 0.05 * s.lambda.iter().map(|l| l.abs()).sum::<f64>() / s.lambda.len() as f64;
-        let lowered: Vec<f64> = s.lambda.iter().map(|l| l - delta).collect();
+        let rot0 = dim - lambda.len();
+        // δ a twentieth of the rotation rows' mean diagonal entry of W̃.
+        let delta = 0.05
+            * (rot0..dim)
+                .map(|k| problem.matrix.upper.val()[certifier.diagonal(k)].re)
+                .sum::<f64>()
+            / lambda.len() as f64;
+        let lowered: Vec<f64> = lambda.iter().map(|l| l - delta).collect();
         let mut proven = [0; 2];
         let mut unproven = 0;
-        for (k, lambda) in [&s.lambda, &lowered].into_iter().enumerate() {
+        for (k, lambda) in [&lambda, &lowered].into_iter().enumerate() {
             let (_, scale) = certifier.scaling(lambda, 0.0, true).unwrap();
             let assembly = assembly_error(problem, &scale);
             // B, dense and Hermitian, from W̃'s upper triangle.
