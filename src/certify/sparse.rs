@@ -1,6 +1,6 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
 use crate::linalg::factor::{Layout, Scalar, SparseFactor, ldlt_error_floor};
-use crate::linalg::roundoff::{U, gamma};
+use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::sparse::SparseColMat;
@@ -774,9 +774,10 @@ struct Rayleigh<'a> {
     /// max_a D_a² over the rotation rows: ‖DPD‖₂, by which a negative η lowers λ₂ (Weyl).
     rotation_scale: f64,
     /// Per row k, the error bound of G_k with its modulus's share, g_error_k + 4u|G_k|, and
-    /// |x_k|: the same at every η that [`Self::check`] tries.
+    /// |x_k|: the same at every η that [`Self::check`] tries (both moduli as their upper bounds
+    /// [`modulus_bound`], as they enter error bounds alone).
     g_slack: Vec<f64>,
-    x_norm: Vec<f64>,
+    x_modulus: Vec<f64>,
 }
 
 impl<'a> Rayleigh<'a> {
@@ -803,11 +804,11 @@ impl<'a> Rayleigh<'a> {
             .g
             .iter()
             .zip(&enclosure.g_error)
-            .map(|(g, e)| e + 4.0 * U * g.norm())
+            .map(|(g, e)| e + 4.0 * U * modulus_bound(*g))
             .collect();
         Rayleigh {
             g_slack,
-            x_norm: x.iter().map(|z| z.norm()).collect(),
+            x_modulus: x.iter().map(|&z| modulus_bound(z)).collect(),
             enclosure,
             x,
             lambda,
@@ -865,14 +866,14 @@ impl<'a> Rayleigh<'a> {
         let (mut res, mut err) = (0.0, 0.0);
         for (k, (&xk, &d)) in self.x.iter().zip(self.scale).enumerate() {
             let (mut r, mut e) = (self.enclosure.g[k], self.g_slack[k]);
-            let xk_norm = self.x_norm[k];
+            let xk_modulus = self.x_modulus[k];
             if k >= rot0 {
                 let l = self.lambda[k - rot0];
                 r -= xk * (l - eta);
-                e += 4.0 * U * (l.abs() + eta.abs()) * xk_norm;
+                e += 4.0 * U * (l.abs() + eta.abs()) * xk_modulus;
             }
             let v = r * d - xk * (sigma / d);
-            let ev = d * e + 4.0 * U * (sigma * xk_norm / d + v.norm());
+            let ev = d * e + 4.0 * U * (sigma * xk_modulus / d + modulus_bound(v));
             res += v.norm_sqr();
             err += ev * ev;
         }

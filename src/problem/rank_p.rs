@@ -303,12 +303,14 @@ impl Problem {
     }
 
     /// f(X) and G = W̃X as [`Self::cost`] and [`Self::half_gradient`] compute them, each with a
-    /// rigorous bound on its rounding error ([`crate::linalg::roundoff`]): the exact f and W̃X of the
+    /// rigorous bound on its rounding error ([`crate::linalg::roundoff`]; the moduli in the bounds
+    /// are [`crate::linalg::roundoff::modulus_bound`]'s upper bounds): the exact f and W̃X of the
     /// floating-point data (τ, κ, Δ, R of every edge and the entries of X) lie within them. The
     /// residuals P_j − P_i − ΔY_i and Y_j − RY_i are formed first, so the errors scale with the
     /// edges' residuals and lengths, not with how far the positions lie from the anchor.
     pub fn enclose(&self, x: &Point) -> Enclosure {
-        use crate::linalg::roundoff::{U, gamma};
+        // m(z) ≥ |z|, for the error terms alone ([`modulus_bound`]).
+        use crate::linalg::roundoff::{U, gamma, modulus_bound as m};
         let p = x.p;
         let zero = c64::new(0.0, 0.0);
         let mut g = vec![zero; x.x.len()];
@@ -320,7 +322,7 @@ impl Problem {
         let mut add = |k: usize, v: c64, error: f64, g: &mut [c64]| {
             g[k] += v;
             g_error[k] += error;
-            magnitude[k] += v.norm();
+            magnitude[k] += m(v);
             count[k] += 1;
         };
         for t in &self.terms {
@@ -330,7 +332,7 @@ impl Problem {
             // An observation has no rotation part: its κ = 0 term is evaluated on y_j = R y_i
             // exactly (er = 0), and nothing is added to a head rotation it does not have.
             let yj_row = self.head_rotation_row(t);
-            let (dn, rn) = (t.delta.norm(), t.rot.norm());
+            let (dn, rn) = (m(t.delta), m(t.rot));
             for c in 0..p {
                 let pi = ri.map_or(zero, |r| x.x[r * p + c]);
                 let pj = rj.map_or(zero, |r| x.x[r * p + c]);
@@ -345,13 +347,13 @@ impl Problem {
                 } else {
                     zero
                 };
-                let det = 4.0 * U * (d.norm() + dn * yi.norm() + et.norm());
+                let det = 4.0 * U * (m(d) + dn * m(yi) + m(et));
                 let der = if yj_row.is_some() {
-                    4.0 * U * (yj.norm() + rn * yi.norm() + er.norm())
+                    4.0 * U * (m(yj) + rn * m(yi) + m(er))
                 } else {
                     0.0
                 };
-                let (nt, nr) = (et.norm(), er.norm());
+                let (nt, nr) = (m(et), m(er));
                 cost += t.tau * et.norm_sqr() + t.kappa * er.norm_sqr();
                 cost_error += t.tau * ((2.0 * nt + det) * det + 4.0 * U * nt * nt)
                     + t.kappa * ((2.0 * nr + der) * der + 4.0 * U * nr * nr);
@@ -365,7 +367,7 @@ impl Problem {
                     add(r * p + c, -wt, ewt, &mut g);
                 }
                 let back = t.delta.conj() * wt + t.rot.conj() * wr;
-                let eback = dn * ewt + rn * ewr + 4.0 * U * (dn * wt.norm() + rn * wr.norm());
+                let eback = dn * ewt + rn * ewr + 4.0 * U * (dn * m(wt) + rn * m(wr));
                 add(yi_row * p + c, -back, eback, &mut g);
                 if let Some(yj_row) = yj_row {
                     add(yj_row * p + c, wr, ewr, &mut g);
