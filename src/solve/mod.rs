@@ -640,8 +640,8 @@ fn hidden_gap_reason(h: &crate::certify::HiddenGap) -> String {
     };
     format!(
         "SZEP unresolved: the second eigenvalue of W(lambda) is below the rounding of its \
-         factorization (equilibrated, at most one eigenvalue below {:.2e} but the error bound \
-         there is {:.2e}); {precise}",
+         factorization (equilibrated, its LDL^H shows at most one negative pivot at the shift \
+         {:.2e}, but the error bound there is {:.2e}); {precise}",
         h.shift, h.error
     )
 }
