@@ -483,13 +483,12 @@ impl SparseCertifier {
         });
         let dd = |v: f64| fx128::from_f64(v);
         let u = <cx128 as crate::linalg::factor::Scalar>::UNIT_ROUNDOFF;
-        let mut values = Vec::with_capacity(self.upper.val().len());
+        let mut values = Vec::new();
         for _ in 0..3 {
             let mut form = f64::MIN_POSITIVE;
-            values.clear();
-            for_each_entry(&self.upper, |r, c, v| {
+            write_values(&self.upper, &mut values, |r, c, v| {
                 let s = scale[r] * scale[c];
-                values.push(added_to_zero(if r == c {
+                if r == c {
                     let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
                     form = form.max(4.0 * u * ((v.re.abs() + l.abs()) * s + mu));
                     cx128 {
@@ -501,7 +500,7 @@ impl SparseCertifier {
                         re: dd(v.re * s),
                         im: dd(v.im * s),
                     }
-                }));
+                }
             });
             self.factorizations += 1;
             if factor.ldlt(matrix(&self.upper, &values)).is_ok() {
@@ -650,16 +649,24 @@ impl SparseCertifier {
         });
     }
 
-    /// Writes the values of the next matrix to factor, `value(row, column, W̃'s entry)` for each
-    /// entry of W̃'s upper triangle in its stored order ([`for_each_entry`]).
-    fn write(&mut self, mut value: impl FnMut(usize, usize, c64) -> c64) {
-        let values = &mut self.values;
-        values.clear();
-        values.reserve_exact(self.upper.val().len());
-        for_each_entry(&self.upper, |r, c, v| {
-            values.push(added_to_zero(value(r, c, v)))
-        });
+    /// Writes the values of the next matrix to factor ([`write_values`]).
+    fn write(&mut self, value: impl FnMut(usize, usize, c64) -> c64) {
+        write_values(&self.upper, &mut self.values, value);
     }
+}
+
+/// Rewrites `values` as those of a matrix in W̃'s pattern (`upper`): `value(row, column, W̃'s
+/// entry)` for each entry of W̃'s upper triangle in its stored order ([`for_each_entry`]), each
+/// added to a zero ([`added_to_zero`]). For the double-precision factorizations
+/// ([`SparseCertifier::write`]) and the double-double one ([`SparseCertifier::precise_gap`]).
+fn write_values<T: Scalar>(
+    upper: &SparseColMat<usize, c64>,
+    values: &mut Vec<T>,
+    mut value: impl FnMut(usize, usize, c64) -> T,
+) {
+    values.clear();
+    values.reserve_exact(upper.val().len());
+    for_each_entry(upper, |r, c, v| values.push(added_to_zero(value(r, c, v))));
 }
 
 /// `v` added to a zero, as an assembly adds each value to its zeroed slot

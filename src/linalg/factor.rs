@@ -1449,8 +1449,6 @@ mod tests {
         edges
     }
 
-    /// `group_ordering` is the rows sorted by (rank of their pose, row), on random ranks and
-    /// groupings (poses with no row, one or several, rows of a pose not adjacent).
     /// The 32-bit and 64-bit slots hold the same indices through every operation, against a
     /// plain list kept beside them: pushed, set, relocated by a permutation, read back in order.
     #[test]
@@ -1494,6 +1492,8 @@ mod tests {
         ));
     }
 
+    /// `group_ordering` is the rows sorted by (rank of their pose, row), on random ranks and
+    /// groupings (poses with no row, one or several, rows of a pose not adjacent).
     #[test]
     fn group_ordering_sorts_rows_by_pose_rank_then_row() {
         let mut rng = crate::linalg::rng::Rng::new(31);

@@ -900,31 +900,22 @@ fn solve_from_start(
                 .or(first);
         }
     }
-    if first.is_none() {
-        if certifier.hidden_gap().is_some()
-            && !certifier.cholesky_within_reach(&local.lambda, &local.point.x, 1)
-        {
-            // The inertia showed at most one eigenvalue of W̃(λ) below a positive shift (the
-            // estimate's own), the gap above it hidden by the rounding: no direction of negative
-            // curvature for the staircase to escape along, and no shifted factorization that
-            // could prove a bound above zero (at 4·10⁶ generated poses the shifted LLᴴ and the
-            // count of near-zero eigenvalues took 31 s of the 152, for a bound of 0).
-            return Some(finish(
-                local,
-                None,
-                None,
-                1,
-                iterations,
-                Some(&mut certifier),
-                options,
-            ));
-        }
+    // Where the inertia showed at most one eigenvalue of W̃(λ) below a positive shift (the
+    // estimate's own), the gap above it hidden by the rounding, and no shifted factorization
+    // could prove a bound above zero, the estimate is reported without a bound: there is no
+    // direction of negative curvature for the staircase to escape along (at 4·10⁶ generated
+    // poses the shifted LLᴴ and the count of near-zero eigenvalues took 31 s of the 152, for a
+    // bound of 0).
+    let hopeless = first.is_none()
+        && certifier.hidden_gap().is_some()
+        && !certifier.cholesky_within_reach(&local.lambda, &local.point.x, 1);
+    if first.is_none() && !hopeless {
         first = certifier.certify_cholesky(&local.lambda, &local.point.x, 1, reach_1);
     }
-    if let Some(bound) = first {
+    if first.is_some() || hopeless {
         return Some(finish(
             local,
-            Some(bound),
+            first,
             None,
             1,
             iterations,
