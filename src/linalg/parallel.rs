@@ -78,8 +78,8 @@ impl<T> Ready<T> {
     }
 }
 
-/// A task that whichever thread comes to it first computes ([`ahead`]): the second core once it
-/// has built what it builds ahead, unless this thread has claimed the task by then.
+/// A task that whichever thread comes to it first computes ([`ahead`], [`spare`]): the second
+/// core once it has built what it builds ahead, unless this thread has claimed the task by then.
 pub struct Spare<T> {
     claimed: std::sync::Arc<std::sync::atomic::AtomicBool>,
     receive: Option<std::sync::mpsc::Receiver<T>>,
@@ -99,9 +99,52 @@ impl<T> Spare<T> {
     }
 }
 
+impl<T> Spare<T> {
+    /// Claims the task without asking for its result: unless the other side has claimed it
+    /// already, it is not computed at all.
+    pub fn forgo(&self) {
+        claim(&self.claimed);
+    }
+}
+
 /// Claims a [`Spare`] task; the claim that comes first wins.
 fn claim(claimed: &std::sync::atomic::AtomicBool) -> bool {
     !claimed.swap(true, std::sync::atomic::Ordering::AcqRel)
+}
+
+/// The second core's side of a [`Spare`] task made by [`spare`].
+pub struct SpareTask<T> {
+    claimed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    send: std::sync::mpsc::Sender<T>,
+}
+
+impl<T> SpareTask<T> {
+    /// Computes the task and hands its result over, unless the other side has claimed it first
+    /// (then nothing is computed here).
+    pub fn run(self, task: impl FnOnce() -> T) {
+        if claim(&self.claimed) {
+            // A closed channel only means that the other side no longer waits for it.
+            let _ = self.send.send(task());
+        }
+    }
+}
+
+/// A task that whichever of two threads comes to it first computes: [`SpareTask::run`] on the
+/// second core, [`Spare::take`] where its result is needed. Run on one thread, where `take`
+/// comes first, `take` computes it.
+pub fn spare<T>() -> (SpareTask<T>, Spare<T>) {
+    let claimed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let (send, receive) = std::sync::mpsc::channel();
+    (
+        SpareTask {
+            claimed: claimed.clone(),
+            send,
+        },
+        Spare {
+            claimed,
+            receive: Some(receive),
+        },
+    )
 }
 
 /// `(main(ready, spare), then())` with `first`, then `spare_task` unless `main` has claimed it
@@ -128,20 +171,13 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
         let r = main(&ready, &spare);
         return (r, then());
     }
-    let (send_spare, receive_spare) = std::sync::mpsc::channel();
-    let spare = Spare {
-        claimed: Default::default(),
-        receive: Some(receive_spare),
-    };
-    let claimed = spare.claimed.clone();
+    let (run_spare, spare) = self::spare();
     std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::channel();
         let helper = scope.spawn(move || {
             // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
-            if claim(&claimed) {
-                let _ = send_spare.send(spare_task());
-            }
+            run_spare.run(spare_task);
             then()
         });
         let ready = Ready {
@@ -197,6 +233,23 @@ mod tests {
         };
         let (_, ()) = ahead(|| (), count, || (), |_, spare| spare.take(count));
         assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 1);
+    }
+
+    /// A spare task of its own ([`spare`]): computed by the side that claims it first, on
+    /// whichever thread, and by neither once forgone.
+    #[test]
+    fn a_spare_task_runs_on_the_side_that_claims_it_or_not_at_all() {
+        let (task, result) = spare::<u32>();
+        assert_eq!(result.take(|| 1), 1);
+        task.run(|| panic!("claimed by take already"));
+        let (task, result) = spare::<u32>();
+        std::thread::scope(|scope| {
+            scope.spawn(move || task.run(|| 2)).join().unwrap();
+        });
+        assert_eq!(result.take(|| panic!("run on the other thread already")), 2);
+        let (task, result) = spare::<u32>();
+        result.forgo();
+        task.run(|| panic!("forgone"));
     }
 
     /// A panic on the second thread reaches the caller.

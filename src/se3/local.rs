@@ -215,6 +215,11 @@ impl System {
     fn dim(&self) -> usize {
         *self.offset.last().unwrap()
     }
+
+    /// The number of values of its factor ([`SparseFactor::mapped_room`]).
+    pub fn values_len(&self) -> usize {
+        self.factor.values_len()
+    }
 }
 
 /// The dense basis of one pose's coordinates over its 4p entries (translation row, then the
@@ -488,12 +493,22 @@ pub fn optimize(
     options: &LocalOptions,
     report: &mut dyn FnMut(Step3),
 ) -> Local3 {
-    optimize_with(problem, translations, x, options, report, &|| None)
+    optimize_with(
+        problem,
+        translations,
+        x,
+        options,
+        report,
+        &|| None,
+        &Vec::new,
+    )
 }
 
 /// As [`optimize`], with the Newton system of `x`'s rank when one was built ahead: `system()`
 /// hands it over (waiting for it if it is still being built), asked once the start's
-/// translations are projected; `None` builds it here.
+/// translations are projected; `None` builds it here. `room()` gives the room of the first
+/// factorization's values ([`SparseFactor::reuse`]), asked just before it: pages mapped ahead on
+/// the second core, or an empty vector (the factorization allocates its own).
 pub fn optimize_with(
     problem: &Problem3,
     translations: &mut Translations,
@@ -501,6 +516,7 @@ pub fn optimize_with(
     options: &LocalOptions,
     report: &mut dyn FnMut(Step3),
     system: &dyn Fn() -> Option<System>,
+    room: &dyn Fn() -> Vec<f64>,
 ) -> Local3 {
     let p = x.p;
     translations.project(problem, &mut x);
@@ -533,6 +549,7 @@ pub fn optimize_with(
         };
     }
     let mut fresh = true;
+    let mut first_factorization = true;
     let mut chord_next = false;
     let mut last_gain = f64::INFINITY;
     let (mut values, mut grad, mut bases) = (Vec::new(), Vec::new(), Vec::new());
@@ -579,6 +596,10 @@ pub fn optimize_with(
                 }
                 sys.assembly.fill(&damped);
                 work += sys.factor.multiply_adds();
+                if first_factorization {
+                    first_factorization = false;
+                    sys.factor.reuse(room());
+                }
                 if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
                     // H + μD is not positive definite: at least β = 1e-3 relative to D, then
                     // doubling (Nocedal and Wright's Algorithm 3.3, Cholesky with added multiple

@@ -31,6 +31,7 @@ pub mod stiefel;
 
 use crate::error::Error;
 use crate::graph3::Graph3;
+use crate::linalg::factor::SparseFactor;
 use certificate::{Bound3, Certifier3};
 use local::{LocalOptions, Step3, System, Translations, optimize, optimize_with};
 use problem::{Point3, Problem3, Weight3};
@@ -171,6 +172,7 @@ pub fn solve_graph3_from(
     };
     let descend = |translations: &dyn Fn() -> Translations,
                    system: &dyn Fn() -> Option<System>,
+                   room: &dyn Fn() -> Vec<f64>,
                    report: &mut dyn FnMut(Step3)| {
         let start = match start {
             Some(poses) => point_of(&problem, poses),
@@ -181,7 +183,15 @@ pub fn solve_graph3_from(
         };
         let mut translations = translations();
         crate::progress::phase("Riemannian Newton, rank 3");
-        let first = optimize_with(&problem, &mut translations, start, &local, report, system);
+        let first = optimize_with(
+            &problem,
+            &mut translations,
+            start,
+            &local,
+            report,
+            system,
+            room,
+        );
         (translations, first)
     };
     // The rank-3 Newton system's assembly and analysis, L's factor and the certificate's analysis
@@ -190,17 +200,36 @@ pub fn solve_graph3_from(
     // certificate's analysis). The descent takes the Newton system once its start is projected
     // (torus3D: the system's 30 ms beside the chordal estimate's instead of before it); L's
     // factor, for that projection, is a spare task that whichever thread comes to it first
-    // computes. Each is computed as it would be here: the same bits on one core or two.
+    // computes. Each is computed as it would be here: the same bits on one core or two. Before
+    // the certificate's analysis, which is needed only after Newton, the second core maps the
+    // pages of the room for the Newton factor's values (another spare task), which the first
+    // factorization would otherwise fault in one by one on this thread (torus3D: its first LLᵀ
+    // took 43 ms, the second 30 ms).
+    let values = std::sync::atomic::AtomicUsize::new(0);
+    let (map_room, room) = crate::linalg::parallel::spare();
     let ((mut translations, mut first), mut certifier) = crate::linalg::parallel::ahead(
-        || System::new(&problem, 3),
+        || {
+            let system = System::new(&problem, 3);
+            values.store(system.values_len(), std::sync::atomic::Ordering::Release);
+            system
+        },
         || Translations::new(&problem),
-        || Certifier3::new(&problem),
+        || {
+            map_room.run(|| {
+                SparseFactor::mapped_room(values.load(std::sync::atomic::Ordering::Acquire))
+            });
+            Certifier3::new(&problem)
+        },
         |system, translations| {
-            descend(
+            let descent = descend(
                 &|| translations.take(|| Translations::new(&problem)),
                 &|| system.take(),
+                &|| room.take(Vec::new),
                 report,
-            )
+            );
+            // Not mapped for nothing where no factorization asked for it (on one core, always).
+            room.forgo();
+            descent
         },
     );
     // The Newton factor's memory, pages mapped, for the certificate's factor.
