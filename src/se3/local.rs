@@ -745,6 +745,44 @@ mod tests {
     use crate::simulate::space::{SpaceConfig, World3, simulate3};
     use crate::simulate::{RotationNoise, TranslationNoise};
 
+    /// The problem of a noisy 27-pose grid (seed `seed`), anchored at pose `anchor`.
+    fn grid(seed: u64, anchor: usize) -> Problem3 {
+        let graph = simulate3(&SpaceConfig {
+            world: World3::Grid,
+            n: 27,
+            side: 6.0,
+            loop_probability: 0.3,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
+            seed,
+        })
+        .graph;
+        let weights = weights3(&graph, false).unwrap();
+        Problem3::new(&graph, &weights, anchor)
+    }
+
+    /// A random point of St(3, p)^n × ℝ^{p(n−1)} (normal entries, each rotation block's rows
+    /// made orthonormal), with QX and the poses' tangent bases there.
+    fn random_point(
+        problem: &Problem3,
+        p: usize,
+        rng: &mut Rng,
+    ) -> (Point3, Vec<f64>, Vec<Vec<f64>>) {
+        let mut x = Point3 {
+            p,
+            x: (0..problem.dim() * p).map(|_| rng.normal()).collect(),
+        };
+        for u in 0..problem.n {
+            let r0 = problem.rotation_row(u, 0);
+            assert!(polar_rows(&mut x.x[r0 * p..(r0 + 3) * p], p));
+        }
+        let qx = apply_q(problem, &x);
+        let bases = (0..problem.n)
+            .map(|u| pose_basis(problem, &x, u, p))
+            .collect();
+        (x, qx, bases)
+    }
+
     /// The Hessian's values as the formula 2 B_uᵀ (S_uv ⊗ I_p) B_v reads, entry by entry: each
     /// entry of K = (S_uv ⊗ I_p) B_v summed over S's columns in order, then each value the sum
     /// over i of B_u[i, a] K[i, b] in order (f64's iterator sum).
@@ -791,33 +829,11 @@ mod tests {
     /// St(3, p)^n × ℝ^{p(n−1)}.
     #[test]
     fn hessian_values_are_the_formula_bit_for_bit() {
-        let graph = simulate3(&SpaceConfig {
-            world: World3::Grid,
-            n: 27,
-            side: 6.0,
-            loop_probability: 0.3,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
-            seed: 3,
-        })
-        .graph;
-        let weights = weights3(&graph, false).unwrap();
-        let problem = Problem3::new(&graph, &weights, 0);
+        let problem = grid(3, 0);
         let mut rng = Rng::new(11);
         for p in [3, 4, 5, 6, 7, 9] {
-            let mut x = Point3 {
-                p,
-                x: (0..problem.dim() * p).map(|_| rng.normal()).collect(),
-            };
-            for u in 0..problem.n {
-                let r0 = problem.rotation_row(u, 0);
-                assert!(polar_rows(&mut x.x[r0 * p..(r0 + 3) * p], p));
-            }
+            let (x, qx, bases) = random_point(&problem, p, &mut rng);
             let sys = System::new(&problem, p);
-            let qx = apply_q(&problem, &x);
-            let bases: Vec<Vec<f64>> = (0..problem.n)
-                .map(|u| pose_basis(&problem, &x, u, p))
-                .collect();
             let (values, _) = hessian(&problem, &sys, &x, &qx, &bases);
             let expected = values_by_formula(&problem, &sys, &x, &qx);
             assert_eq!(values.len(), sys.count, "rank {p}");
@@ -834,33 +850,11 @@ mod tests {
     /// points and directions of ranks 3 to 5, to rounding.
     #[test]
     fn the_curvature_without_the_hessian_is_the_assembled_one() {
-        let graph = simulate3(&SpaceConfig {
-            world: World3::Grid,
-            n: 27,
-            side: 6.0,
-            loop_probability: 0.3,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
-            seed: 5,
-        })
-        .graph;
-        let weights = weights3(&graph, false).unwrap();
-        let problem = Problem3::new(&graph, &weights, 4);
+        let problem = grid(5, 4);
         let mut rng = Rng::new(17);
         for p in [3, 4, 5] {
-            let mut x = Point3 {
-                p,
-                x: (0..problem.dim() * p).map(|_| rng.normal()).collect(),
-            };
-            for u in 0..problem.n {
-                let r0 = problem.rotation_row(u, 0);
-                assert!(polar_rows(&mut x.x[r0 * p..(r0 + 3) * p], p));
-            }
+            let (x, qx, bases) = random_point(&problem, p, &mut rng);
             let sys = System::new(&problem, p);
-            let qx = apply_q(&problem, &x);
-            let bases: Vec<Vec<f64>> = (0..problem.n)
-                .map(|u| pose_basis(&problem, &x, u, p))
-                .collect();
             let (values, _) = hessian(&problem, &sys, &x, &qx, &bases);
             let lambda = lambda_blocks(&problem, &x, &qx);
             let zero = vec![0.0; sys.dim()];
