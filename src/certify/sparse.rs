@@ -4,7 +4,7 @@ use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::sparse::SparseColMat;
-use faer::{c64, cx128, fx128};
+use faer::{Side, c64, cx128, fx128};
 use std::sync::Arc;
 
 /// The sparse certificate of the scalable solver (docs/method.md §3.4). For a rank-1 estimate the
@@ -35,12 +35,18 @@ use std::sync::Arc;
 /// spread of the estimate) and never falls below the backward error.
 pub struct SparseCertifier {
     /// The values of the matrix each factorization factors (W̃(λ), shifted and scaled as its
-    /// proof needs), entry for entry in W̃'s own pattern ([`Self::write`]), which is that
-    /// matrix's pattern; allocated at the first factorization. (An assembly of its own, a copy
-    /// of the pattern with identity slots, took 114 MB at 10⁶ poses, and its values 99 MB more
-    /// through the Newton steps.)
+    /// proof needs), in the pattern the factor factors ([`Self::write`]): W̃'s kept in the
+    /// factor's order ([`Permuted`]), or, from [`PERMUTED_BELOW_ROWS`] rows, W̃'s own; allocated
+    /// at the first factorization. (At 10⁶ poses an assembly of its own, a copy of the pattern
+    /// with identity slots, took 114 MB, and its values 99 MB more through the Newton steps.)
     values: Vec<c64>,
     factor: SparseFactor<c64>,
+    /// The fill-reducing order of W̃'s rows (`order[new] = old`).
+    order: Vec<usize>,
+    /// W̃'s pattern in that order, which the factor is analyzed and factors in ([`Permuted`]):
+    /// below [`PERMUTED_BELOW_ROWS`] rows. Above, the factor holds the order and faer permutes
+    /// each matrix it factors into a copy of its own.
+    permuted: Option<Permuted>,
     /// The factor's row counts ([`SparseFactor::row_counts`]), for the ladder's
     /// [`ldlt_error_floor`].
     row_counts: Vec<u32>,
@@ -123,11 +129,47 @@ impl SparseCertifier {
     /// [`crate::problem::matrix::PoseGraphMatrix::upper`]) once, rows in a fill-reducing
     /// `order`; every later certificate reuses it.
     pub fn new(upper: &Arc<SparseColMat<usize, c64>>, order: &[usize]) -> Self {
-        let factor = SparseFactor::analyze_ordered(upper.symbolic(), order, Layout::AutoComplex);
+        Self::with_storage(upper, order, upper.ncols() < PERMUTED_BELOW_ROWS)
+    }
+
+    /// [`Self::new`], W̃'s pattern kept in the factor's order ([`Permuted`]) or not.
+    fn with_storage(
+        upper: &Arc<SparseColMat<usize, c64>>,
+        order: &[usize],
+        keep_permuted: bool,
+    ) -> Self {
+        let (factor, permuted, row_counts) = if keep_permuted {
+            let permuted = Permuted::new(upper, order, Side::Upper);
+            let factor = SparseFactor::analyze_in_order(
+                permuted.pattern.as_ref(),
+                Side::Upper,
+                Layout::AutoComplex,
+            );
+            let (factor, permuted) = match factor.read_side() {
+                Side::Upper => (factor, permuted),
+                Side::Lower => (
+                    factor.given(Side::Lower),
+                    Permuted::new(upper, order, Side::Lower),
+                ),
+            };
+            // The counts by row of the permuted matrix, back to W̃'s rows.
+            let mut counts = vec![0; order.len()];
+            for (k, c) in factor.row_counts().into_iter().enumerate() {
+                counts[order[k]] = c;
+            }
+            (factor, Some(permuted), counts)
+        } else {
+            let factor =
+                SparseFactor::analyze_ordered(upper.symbolic(), order, Layout::AutoComplex);
+            let counts = factor.row_counts();
+            (factor, None, counts)
+        };
         SparseCertifier {
             values: Vec::new(),
-            row_counts: factor.row_counts(),
+            row_counts,
             factor,
+            order: order.to_vec(),
+            permuted,
             upper: Arc::clone(upper),
             factorizations: 0,
             shifts: ShiftMemory::default(),
@@ -447,7 +489,11 @@ impl SparseCertifier {
             return None;
         }
         self.factorizations += 1;
-        if self.factor.ldlt(matrix(&self.upper, &self.values)).is_err() {
+        if self
+            .factor
+            .ldlt(factored(&self.upper, &self.permuted, &self.values))
+            .is_err()
+        {
             return Some(None);
         }
         let negative = self.factor.inertia_below(0.0);
@@ -475,11 +521,7 @@ impl SparseCertifier {
             return None;
         }
         let factor = self.precise.get_or_insert_with(|| {
-            SparseFactor::analyze_ordered(
-                self.upper.symbolic(),
-                &self.factor.order(),
-                Layout::Simplicial,
-            )
+            SparseFactor::analyze_ordered(self.upper.symbolic(), &self.order, Layout::Simplicial)
         });
         let dd = |v: f64| fx128::from_f64(v);
         let u = <cx128 as crate::linalg::factor::Scalar>::UNIT_ROUNDOFF;
@@ -606,7 +648,8 @@ impl SparseCertifier {
             }
         });
         self.factorizations += 1;
-        self.factor.llt(matrix(&self.upper, &self.values)).is_ok()
+        let a = factored(&self.upper, &self.permuted, &self.values);
+        self.factor.llt(a).is_ok()
     }
 
     /// The eigenvalues of W̃(λ) at zero: the count a deflated proof established when `bound` is
@@ -623,35 +666,149 @@ impl SparseCertifier {
     /// negative pivots of an LDLᴴ of W̃(λ) − threshold·I). `None` on a zero pivot.
     pub fn count_below(&mut self, lambda: &[f64], threshold: f64) -> Option<usize> {
         self.fill_shifted(lambda, threshold);
-        self.factor.ldlt(matrix(&self.upper, &self.values)).ok()?;
+        let a = factored(&self.upper, &self.permuted, &self.values);
+        self.factor.ldlt(a).ok()?;
         Some(self.factor.inertia_below(0.0))
     }
 
-    /// W̃(λ) (upper triangle), e.g. for a negative-curvature direction.
+    /// W̃(λ) (upper triangle, W̃'s own pattern and order), e.g. for a negative-curvature
+    /// direction.
     pub fn penalized_matrix(
         &mut self,
         lambda: &[f64],
     ) -> faer::sparse::SparseColMatRef<'_, usize, c64> {
-        self.fill_shifted(lambda, 0.0);
+        let rot0 = self.dim() - lambda.len();
+        write_values(&self.upper, &mut self.values, |r, c, v| {
+            shifted(r, c, v, rot0, lambda, 0.0)
+        });
         matrix(&self.upper, &self.values)
     }
 
     fn fill_shifted(&mut self, lambda: &[f64], threshold: f64) {
         let dim = self.dim();
         let rot0 = dim - lambda.len();
-        self.write(|r, c, v| {
-            if r == c {
-                let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
-                c64::new(v.re - l - threshold, 0.0)
-            } else {
-                v
-            }
-        });
+        self.write(|r, c, v| shifted(r, c, v, rot0, lambda, threshold));
     }
 
-    /// Writes the values of the next matrix to factor ([`write_values`]).
+    /// Writes the values of the next matrix to factor: [`write_values`] in W̃'s pattern, or
+    /// each into its place in the permuted one ([`Permuted::write`]).
     fn write(&mut self, value: impl FnMut(usize, usize, c64) -> c64) {
-        write_values(&self.upper, &mut self.values, value);
+        match &self.permuted {
+            Some(permuted) => permuted.write(&self.upper, &mut self.values, value),
+            None => write_values(&self.upper, &mut self.values, value),
+        }
+    }
+}
+
+/// The matrix of the values last written ([`SparseCertifier::write`]) in the pattern its factor
+/// factors: the permuted one where there is one, else W̃'s.
+fn factored<'a>(
+    upper: &'a SparseColMat<usize, c64>,
+    permuted: &'a Option<Permuted>,
+    values: &'a [c64],
+) -> faer::sparse::SparseColMatRef<'a, usize, c64> {
+    match permuted {
+        Some(permuted) => faer::sparse::SparseColMatRef::new(permuted.pattern.as_ref(), values),
+        None => matrix(upper, values),
+    }
+}
+
+/// W̃(λ) − threshold·I's entry at (r, c) from W̃'s entry v (rotations from row `rot0`).
+fn shifted(r: usize, c: usize, v: c64, rot0: usize, lambda: &[f64], threshold: f64) -> c64 {
+    if r == c {
+        let l = if r >= rot0 { lambda[r - rot0] } else { 0.0 };
+        c64::new(v.re - l - threshold, 0.0)
+    } else {
+        v
+    }
+}
+
+/// The rows from which [`SparseCertifier`] leaves the permutation to faer: below, it keeps W̃'s
+/// pattern in the factor's order ([`Permuted`]; 16 bytes a stored entry, some 2 MB on the public
+/// landmark files), which saves faer's copy of each matrix it factors (2.7-4.8% of a planar
+/// process with the chordal start's, in perf samples); from 2²⁰ rows (10⁶ poses and more) it
+/// would be 100 MB on top of the Newton steps' peak memory, where the analysis is built.
+const PERMUTED_BELOW_ROWS: usize = 1 << 20;
+
+/// W̃'s pattern as P W̃ Pᵀ for a fill-reducing order, stored as the triangle that the factor's
+/// numeric factorizations read, each entry placed where faer's own permutation
+/// (`permute_self_adjoint_to_unsorted`) places it: columns in order, within each the entries in
+/// the order of W̃'s columns and rows, an entry that the order moves across the diagonal stored
+/// conjugate. The matrices factored are then faer's copies value for value and slot for slot,
+/// so every factorization gives the same bits, without the copy.
+struct Permuted {
+    pattern: faer::sparse::SymbolicSparseColMat<usize>,
+    /// For each of W̃'s stored entries, in its stored order: its place in the permuted
+    /// matrix's values, with [`CONJUGATE`] set where the conjugate goes there.
+    slots: Vec<usize>,
+}
+
+/// The bit of a [`Permuted`] slot that marks an entry stored conjugate.
+const CONJUGATE: usize = 1 << (usize::BITS - 1);
+
+impl Permuted {
+    /// P W̃ Pᵀ for `order` (`order[new] = old`), stored as the `side` triangle.
+    fn new(upper: &SparseColMat<usize, c64>, order: &[usize], side: Side) -> Self {
+        let n = upper.ncols();
+        let mut new = vec![0; n];
+        for (k, &old) in order.iter().enumerate() {
+            new[old] = k;
+        }
+        let (col_ptr, row_idx) = (upper.symbolic().col_ptr(), upper.symbolic().row_idx());
+        // Entry (i, j) of W̃'s upper triangle goes to (column, row, conjugated) of the permuted
+        // triangle.
+        let place = |i: usize, j: usize| {
+            let (a, b) = (new[i], new[j]);
+            let kept = match side {
+                Side::Upper => a <= b,
+                Side::Lower => a >= b,
+            };
+            if kept { (b, a, false) } else { (a, b, true) }
+        };
+        let mut next = vec![0usize; n + 1];
+        for j in 0..n {
+            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+                next[place(i, j).0 + 1] += 1;
+            }
+        }
+        for c in 0..n {
+            next[c + 1] += next[c];
+        }
+        let starts = next.clone();
+        let mut rows = vec![0; row_idx.len()];
+        let mut slots = vec![0; row_idx.len()];
+        for j in 0..n {
+            for k in col_ptr[j]..col_ptr[j + 1] {
+                let (column, row, conjugated) = place(row_idx[k], j);
+                let at = next[column];
+                next[column] += 1;
+                rows[at] = row;
+                slots[k] = at | if conjugated { CONJUGATE } else { 0 };
+            }
+        }
+        let pattern =
+            faer::sparse::SymbolicSparseColMat::new_unsorted_checked(n, n, starts, None, rows);
+        Permuted { pattern, slots }
+    }
+
+    /// The values of a matrix in W̃'s pattern, `value(row, column, W̃'s entry)` for each entry of
+    /// W̃'s upper triangle, written into their places ([`write_values`]'s, each added to a
+    /// zero, then conjugated where the permutation moved it across the diagonal).
+    fn write(
+        &self,
+        upper: &SparseColMat<usize, c64>,
+        values: &mut Vec<c64>,
+        mut value: impl FnMut(usize, usize, c64) -> c64,
+    ) {
+        values.clear();
+        values.resize(self.slots.len(), c64::new(0.0, 0.0));
+        let mut k = 0;
+        for_each_entry(upper, |r, c, v| {
+            let slot = self.slots[k];
+            let v = added_to_zero(value(r, c, v));
+            values[slot & !CONJUGATE] = if slot & CONJUGATE != 0 { v.conj() } else { v };
+            k += 1;
+        });
     }
 }
 
@@ -1052,5 +1209,67 @@ mod tests {
             proven[0] > 0 && proven[1] > 0 && unproven > 0,
             "{proven:?} {unproven}"
         );
+    }
+
+    /// W̃'s pattern kept in the factor's order ([`Permuted`]) factors the matrices that faer's
+    /// own permutation copies: at noisy graphs' ground truth, the inertia and error bound of each
+    /// shifted LDLᴴ, the shifted LLᴴ's bound and the count below a threshold are the same bits
+    /// either way, for a factor read as its upper triangle (simplicial) and one read as its lower
+    /// (supernodal: the permutation moves entries across the diagonal both ways).
+    #[test]
+    fn the_kept_permuted_pattern_factors_faers_own_copies() {
+        let mut sides = Vec::new();
+        for (n, loops, seed) in [(40, 0.02, 3), (300, 0.05, 7)] {
+            let sim = simulate(&SimulationConfig {
+                n,
+                seed,
+                loop_probability: loops,
+                rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+                translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
+                ..Default::default()
+            });
+            let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
+            let problem = &Problem::new(&sim.graph, &w);
+            let mut x = vec![c64::new(0.0, 0.0); problem.rows()];
+            for (k, pose) in sim.truth.iter().enumerate() {
+                if let Some(r) = problem.position_row(k) {
+                    x[r] = c64::new(pose.x - sim.truth[0].x, pose.y - sim.truth[0].y);
+                }
+                x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
+            }
+            let lambda = problem.multipliers(&Point { p: 1, x: x.clone() }, &{
+                let point = Point { p: 1, x: x.clone() };
+                problem.half_gradient(&point)
+            });
+            let order = problem.row_order();
+            let mut kept = SparseCertifier::with_storage(&problem.matrix.upper, &order, true);
+            let mut copied = SparseCertifier::with_storage(&problem.matrix.upper, &order, false);
+            assert!(kept.permuted.is_some() && copied.permuted.is_none());
+            assert_eq!(kept.row_counts, copied.row_counts);
+            sides.push(kept.factor.read_side());
+            let (_, scale) = kept.scaling(&lambda, 0.0, true).unwrap();
+            for mu in [1e-6, 1e-3, 1e-1, 1.0] {
+                let bits =
+                    |r: Option<Option<(usize, f64)>>| r.flatten().map(|(k, e)| (k, e.to_bits()));
+                assert_eq!(
+                    bits(kept.inertia_at(&lambda, &scale, mu)),
+                    bits(copied.inertia_at(&lambda, &scale, mu)),
+                    "n {n}, μ {mu:e}"
+                );
+                assert_eq!(
+                    kept.count_below(&lambda, mu),
+                    copied.count_below(&lambda, mu),
+                    "n {n}, μ {mu:e}"
+                );
+            }
+            let bound = |c: &mut SparseCertifier| {
+                c.certify_cholesky(&lambda, &x, 1, 1e3)
+                    .map(|b| (b.eta.to_bits(), b.lower_bound.to_bits()))
+            };
+            let proven = bound(&mut kept);
+            assert!(proven.is_some(), "n {n}: no shifted LLᴴ succeeded");
+            assert_eq!(proven, bound(&mut copied), "n {n}");
+        }
+        assert_eq!(sides, [Side::Upper, Side::Lower]);
     }
 }
