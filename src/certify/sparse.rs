@@ -1091,6 +1091,19 @@ mod tests {
     use crate::simulate::{RotationNoise, SimulationConfig, TranslationNoise, simulate};
     use faer::{Mat, Side};
 
+    /// A generated graph's ground truth as a rank-1 point: positions relative to pose 0's, unit
+    /// rotations.
+    fn truth_point(problem: &Problem, truth: &[crate::graph::Pose2]) -> Point {
+        let mut x = vec![c64::new(0.0, 0.0); problem.rows()];
+        for (k, pose) in truth.iter().enumerate() {
+            if let Some(r) = problem.position_row(k) {
+                x[r] = c64::new(pose.x - truth[0].x, pose.y - truth[0].y);
+            }
+            x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
+        }
+        Point { p: 1, x }
+    }
+
     /// The double-double gap ([`SparseCertifier::precise_gap`]), which no public file reaches (it
     /// runs where double precision's rounding hides the gap), held against the eigenvalues of
     /// B = D W̃(λ) D from a dense eigendecomposition, at the optimum of a generated graph without
@@ -1112,16 +1125,7 @@ mod tests {
         });
         let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
         let problem = &Problem::new(&sim.graph, &w);
-        // The truth as a rank-1 point: positions relative to pose 0's, unit rotations.
-        let mut x = vec![c64::new(0.0, 0.0); problem.rows()];
-        let origin = &sim.truth[0];
-        for (k, pose) in sim.truth.iter().enumerate() {
-            if let Some(r) = problem.position_row(k) {
-                x[r] = c64::new(pose.x - origin.x, pose.y - origin.y);
-            }
-            x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
-        }
-        let point = Point { p: 1, x };
+        let point = truth_point(problem, &sim.truth);
         let weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
         assert!(
             problem.cost(&point) < 1e-20 * weight,
@@ -1230,17 +1234,9 @@ mod tests {
             });
             let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
             let problem = &Problem::new(&sim.graph, &w);
-            let mut x = vec![c64::new(0.0, 0.0); problem.rows()];
-            for (k, pose) in sim.truth.iter().enumerate() {
-                if let Some(r) = problem.position_row(k) {
-                    x[r] = c64::new(pose.x - sim.truth[0].x, pose.y - sim.truth[0].y);
-                }
-                x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
-            }
-            let lambda = problem.multipliers(&Point { p: 1, x: x.clone() }, &{
-                let point = Point { p: 1, x: x.clone() };
-                problem.half_gradient(&point)
-            });
+            let point = truth_point(problem, &sim.truth);
+            let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+            let x = point.x;
             let order = problem.row_order();
             let mut kept = SparseCertifier::with_storage(&problem.matrix.upper, &order, true);
             let mut copied = SparseCertifier::with_storage(&problem.matrix.upper, &order, false);
