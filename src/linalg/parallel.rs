@@ -97,9 +97,7 @@ impl<T> Spare<T> {
             None => compute(),
         }
     }
-}
 
-impl<T> Spare<T> {
     /// Claims the task without asking for its result: unless the other side has claimed it
     /// already, it is not computed at all.
     pub fn forgo(&self) {
