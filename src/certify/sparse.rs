@@ -1,5 +1,5 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
-use crate::linalg::factor::{Layout, Scalar, SparseFactor, ldlt_error_floor};
+use crate::linalg::factor::{Layout, Permuted, Scalar, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -139,7 +139,7 @@ impl SparseCertifier {
         keep_permuted: bool,
     ) -> Self {
         let (factor, permuted, row_counts) = if keep_permuted {
-            let permuted = Permuted::new(upper, order, Side::Upper);
+            let permuted = Permuted::new(upper, order, Side::Upper, None);
             let factor = SparseFactor::analyze_in_order(
                 permuted.pattern.as_ref(),
                 Side::Upper,
@@ -149,7 +149,7 @@ impl SparseCertifier {
                 Side::Upper => (factor, permuted),
                 Side::Lower => (
                     factor.given(Side::Lower),
-                    Permuted::new(upper, order, Side::Lower),
+                    Permuted::new(upper, order, Side::Lower, None),
                 ),
             };
             // The counts by row of the permuted matrix, back to W̃'s rows.
@@ -691,10 +691,10 @@ impl SparseCertifier {
     }
 
     /// Writes the values of the next matrix to factor: [`write_values`] in W̃'s pattern, or
-    /// each into its place in the permuted one ([`Permuted::write`]).
+    /// each into its place in the permuted one ([`write_permuted`]).
     fn write(&mut self, value: impl FnMut(usize, usize, c64) -> c64) {
         match &self.permuted {
-            Some(permuted) => permuted.write(&self.upper, &mut self.values, value),
+            Some(permuted) => write_permuted(permuted, &self.upper, &mut self.values, value),
             None => write_values(&self.upper, &mut self.values, value),
         }
     }
@@ -730,86 +730,21 @@ fn shifted(r: usize, c: usize, v: c64, rot0: usize, lambda: &[f64], threshold: f
 /// would be 100 MB on top of the Newton steps' peak memory, where the analysis is built.
 const PERMUTED_BELOW_ROWS: usize = 1 << 20;
 
-/// W̃'s pattern as P W̃ Pᵀ for a fill-reducing order, stored as the triangle that the factor's
-/// numeric factorizations read, each entry placed where faer's own permutation
-/// (`permute_self_adjoint_to_unsorted`) places it: columns in order, within each the entries in
-/// the order of W̃'s columns and rows, an entry that the order moves across the diagonal stored
-/// conjugate. The matrices factored are then faer's copies value for value and slot for slot,
-/// so every factorization gives the same bits, without the copy.
-struct Permuted {
-    pattern: faer::sparse::SymbolicSparseColMat<usize>,
-    /// For each of W̃'s stored entries, in its stored order: its place in the permuted
-    /// matrix's values, with [`CONJUGATE`] set where the conjugate goes there.
-    slots: Vec<usize>,
-}
-
-/// The bit of a [`Permuted`] slot that marks an entry stored conjugate.
-const CONJUGATE: usize = 1 << (usize::BITS - 1);
-
-impl Permuted {
-    /// P W̃ Pᵀ for `order` (`order[new] = old`), stored as the `side` triangle.
-    fn new(upper: &SparseColMat<usize, c64>, order: &[usize], side: Side) -> Self {
-        let n = upper.ncols();
-        let mut new = vec![0; n];
-        for (k, &old) in order.iter().enumerate() {
-            new[old] = k;
-        }
-        let (col_ptr, row_idx) = (upper.symbolic().col_ptr(), upper.symbolic().row_idx());
-        // Entry (i, j) of W̃'s upper triangle goes to (column, row, conjugated) of the permuted
-        // triangle.
-        let place = |i: usize, j: usize| {
-            let (a, b) = (new[i], new[j]);
-            let kept = match side {
-                Side::Upper => a <= b,
-                Side::Lower => a >= b,
-            };
-            if kept { (b, a, false) } else { (a, b, true) }
-        };
-        let mut next = vec![0usize; n + 1];
-        for j in 0..n {
-            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
-                next[place(i, j).0 + 1] += 1;
-            }
-        }
-        for c in 0..n {
-            next[c + 1] += next[c];
-        }
-        let starts = next.clone();
-        let mut rows = vec![0; row_idx.len()];
-        let mut slots = vec![0; row_idx.len()];
-        for j in 0..n {
-            for k in col_ptr[j]..col_ptr[j + 1] {
-                let (column, row, conjugated) = place(row_idx[k], j);
-                let at = next[column];
-                next[column] += 1;
-                rows[at] = row;
-                slots[k] = at | if conjugated { CONJUGATE } else { 0 };
-            }
-        }
-        let pattern =
-            faer::sparse::SymbolicSparseColMat::new_unsorted_checked(n, n, starts, None, rows);
-        Permuted { pattern, slots }
-    }
-
-    /// The values of a matrix in W̃'s pattern, `value(row, column, W̃'s entry)` for each entry of
-    /// W̃'s upper triangle, written into their places ([`write_values`]'s, each added to a
-    /// zero, then conjugated where the permutation moved it across the diagonal).
-    fn write(
-        &self,
-        upper: &SparseColMat<usize, c64>,
-        values: &mut Vec<c64>,
-        mut value: impl FnMut(usize, usize, c64) -> c64,
-    ) {
-        values.clear();
-        values.resize(self.slots.len(), c64::new(0.0, 0.0));
-        let mut k = 0;
-        for_each_entry(upper, |r, c, v| {
-            let slot = self.slots[k];
-            let v = added_to_zero(value(r, c, v));
-            values[slot & !CONJUGATE] = if slot & CONJUGATE != 0 { v.conj() } else { v };
-            k += 1;
-        });
-    }
+/// [`write_values`] into the places of a permuted pattern: each value added to a zero, then
+/// conjugated where the permutation moved its entry across the diagonal.
+fn write_permuted(
+    permuted: &Permuted,
+    upper: &SparseColMat<usize, c64>,
+    values: &mut Vec<c64>,
+    mut value: impl FnMut(usize, usize, c64) -> c64,
+) {
+    values.clear();
+    values.resize(permuted.len(), c64::new(0.0, 0.0));
+    let mut k = 0;
+    for_each_entry(upper, |r, c, v| {
+        permuted.put(k, added_to_zero(value(r, c, v)), values);
+        k += 1;
+    });
 }
 
 /// Rewrites `values` as those of a matrix in W̃'s pattern (`upper`): `value(row, column, W̃'s

@@ -18,7 +18,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, MatMut, Par, Side, c64};
 
 /// A numeric factorization broke down: a pivot that is not positive (LLᴴ) or zero (LDLᴴ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -715,7 +715,7 @@ impl Scalar for faer::cx128 {
     const UNIT_ROUNDOFF: f64 = 32.0 * crate::linalg::roundoff::U * crate::linalg::roundoff::U;
 }
 
-impl Scalar for faer::c64 {
+impl Scalar for c64 {
     fn re(self) -> f64 {
         self.re
     }
@@ -1289,6 +1289,123 @@ pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
 pub const SUPERNODE_RELAXATION: &[(usize, f64)] =
     &[(4, 0.5), (16, 0.3), (48, 0.05), (usize::MAX, 0.02)];
 
+/// A Hermitian matrix's pattern (`upper`: its upper triangle, stored as faer's CSC) as
+/// P A Pᵀ for a fill-reducing order, without one of its rows and columns where asked, stored as
+/// the triangle that a factor's numeric factorizations read. Each entry sits where faer's own
+/// permutation (`permute_self_adjoint_to_unsorted`, which a factor analyzed with an order runs
+/// on every matrix it factors) puts it: columns in order, within each the entries in the order
+/// of A's columns and rows, an entry that the order moves across the diagonal conjugated. A
+/// factor analyzed in this order ([`SparseFactor::analyze_in_order`]) then factors faer's copies
+/// value for value and slot for slot, the same bits, without the copy.
+pub struct Permuted {
+    /// The permuted pattern (rows unsorted within a column, as faer's copies).
+    pub pattern: SymbolicSparseColMat<usize>,
+    /// For each of A's stored entries, in its stored order: its place in the permuted matrix's
+    /// values, with [`Permuted::CONJUGATE`] set where the conjugate goes there, or
+    /// [`Permuted::DROPPED`] for an entry of the row and column left out.
+    slots: Vec<usize>,
+}
+
+impl Permuted {
+    /// The bit of a slot that marks an entry stored conjugate.
+    const CONJUGATE: usize = 1 << (usize::BITS - 1);
+    /// The slot of an entry left out.
+    const DROPPED: usize = usize::MAX;
+
+    /// P A Pᵀ of `upper`'s matrix A for `order` (`order[new] = old`), stored as the `side`
+    /// triangle; without row and column `dropped` where given (then the rows above it move up
+    /// by one, and `order` orders the rows that are left in that numbering).
+    pub fn new(
+        upper: &SparseColMat<usize, c64>,
+        order: &[usize],
+        side: Side,
+        dropped: Option<usize>,
+    ) -> Self {
+        let n = order.len();
+        let mut new = vec![0; n];
+        for (k, &old) in order.iter().enumerate() {
+            new[old] = k;
+        }
+        // A's row k in the matrix without `dropped`.
+        let kept = |k: usize| match dropped {
+            Some(d) if k == d => None,
+            Some(d) if k > d => Some(k - 1),
+            _ => Some(k),
+        };
+        let (col_ptr, row_idx) = (upper.symbolic().col_ptr(), upper.symbolic().row_idx());
+        // Entry (i, j) of A's upper triangle goes to (column, row, conjugated) of the permuted
+        // triangle.
+        let place = |i: usize, j: usize| {
+            let (a, b) = (new[kept(i)?], new[kept(j)?]);
+            let stays = match side {
+                Side::Upper => a <= b,
+                Side::Lower => a >= b,
+            };
+            Some(if stays { (b, a, false) } else { (a, b, true) })
+        };
+        let mut next = vec![0usize; n + 1];
+        for j in 0..upper.ncols() {
+            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+                if let Some((column, _, _)) = place(i, j) {
+                    next[column + 1] += 1;
+                }
+            }
+        }
+        for c in 0..n {
+            next[c + 1] += next[c];
+        }
+        let starts = next.clone();
+        let mut rows = vec![0; next[n]];
+        let mut slots = vec![Self::DROPPED; row_idx.len()];
+        for j in 0..upper.ncols() {
+            for k in col_ptr[j]..col_ptr[j + 1] {
+                if let Some((column, row, conjugated)) = place(row_idx[k], j) {
+                    let at = next[column];
+                    next[column] += 1;
+                    rows[at] = row;
+                    slots[k] = at | if conjugated { Self::CONJUGATE } else { 0 };
+                }
+            }
+        }
+        let pattern = SymbolicSparseColMat::new_unsorted_checked(n, n, starts, None, rows);
+        Permuted { pattern, slots }
+    }
+
+    /// The number of the permuted matrix's stored entries.
+    pub fn len(&self) -> usize {
+        self.pattern.row_idx().len()
+    }
+
+    /// Whether it stores no entry.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Puts the value `v` of A's `k`-th stored entry into its place among `values` (the permuted
+    /// matrix's), conjugated where the permutation moved it across the diagonal; nothing for an
+    /// entry left out.
+    #[inline]
+    pub fn put(&self, k: usize, v: c64, values: &mut [c64]) {
+        let slot = self.slots[k];
+        if slot != Self::DROPPED {
+            values[slot & !Self::CONJUGATE] = if slot & Self::CONJUGATE != 0 {
+                v.conj()
+            } else {
+                v
+            };
+        }
+    }
+
+    /// The permuted matrix of A's own values (`upper`'s).
+    pub fn values_of(&self, upper: &SparseColMat<usize, c64>) -> Vec<c64> {
+        let mut values = vec![c64::new(0.0, 0.0); self.len()];
+        for (k, &v) in upper.val().iter().enumerate() {
+            self.put(k, v, &mut values);
+        }
+        values
+    }
+}
+
 /// `block_work` of [`pose_rank`] for the 3D problems: the Newton systems' 6 real rows per pose.
 pub const SPATIAL_BLOCK_WORK: f64 = 216.0;
 
@@ -1418,8 +1535,84 @@ pub fn group_ordering(rank: &[usize], group: &[usize]) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use faer::c64;
     use faer::sparse::Triplet;
+
+    /// [`Permuted`] against faer's own permutation (`permute_self_adjoint_to_unsorted`, the
+    /// copy a factor analyzed with an order makes of each matrix): for a random Hermitian pattern
+    /// with complex values, random orders, both stored triangles, with and without a row and
+    /// column left out (faer then given the matrix without them), the same column pointers, rows
+    /// and values, bit for bit.
+    #[test]
+    fn permuted_is_faers_permutation_without_the_copy() {
+        let mut rng = crate::linalg::rng::Rng::new(41);
+        let n = 40;
+        let mut entries = Vec::new();
+        for j in 0..n {
+            entries.push((j, j, c64::new(4.0 + rng.normal().abs(), 0.0)));
+            for i in 0..j {
+                if rng.next_u64().is_multiple_of(5) {
+                    entries.push((i, j, c64::new(rng.normal(), rng.normal())));
+                }
+            }
+        }
+        let triplets = |dropped: Option<usize>| {
+            let kept = |k: usize| match dropped {
+                Some(d) if k == d => None,
+                Some(d) if k > d => Some(k - 1),
+                _ => Some(k),
+            };
+            entries
+                .iter()
+                .filter_map(|&(i, j, v)| Some(Triplet::new(kept(i)?, kept(j)?, v)))
+                .collect::<Vec<_>>()
+        };
+        let matrix = |t: &[Triplet<usize, usize, c64>], m: usize| {
+            SparseColMat::<usize, c64>::try_new_from_triplets(m, m, t).unwrap()
+        };
+        let upper = matrix(&triplets(None), n);
+        for dropped in [None, Some(0), Some(17), Some(n - 1)] {
+            let m = n - usize::from(dropped.is_some());
+            let reduced = matrix(&triplets(dropped), m);
+            for side in [Side::Upper, Side::Lower] {
+                for _ in 0..3 {
+                    let mut order: Vec<usize> = (0..m).collect();
+                    for k in (1..m).rev() {
+                        order.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+                    }
+                    let permuted = Permuted::new(&upper, &order, side, dropped);
+                    let values = permuted.values_of(&upper);
+                    let mut inverse = vec![0; m];
+                    for (k, &old) in order.iter().enumerate() {
+                        inverse[old] = k;
+                    }
+                    let perm = faer::perm::PermRef::new_checked(&order, &inverse, m);
+                    let nnz = reduced.val().len();
+                    let (mut val, mut ptr, mut row) = (
+                        vec![c64::new(0.0, 0.0); nnz],
+                        vec![0usize; m + 1],
+                        vec![0usize; nnz],
+                    );
+                    let mut mem = MemBuffer::new(StackReq::new::<usize>(m));
+                    let faers = faer::sparse::utils::permute_self_adjoint_to_unsorted(
+                        &mut val,
+                        &mut ptr,
+                        &mut row,
+                        reduced.as_ref(),
+                        perm,
+                        Side::Upper,
+                        side,
+                        MemStack::new(&mut mem),
+                    );
+                    assert_eq!(permuted.pattern.col_ptr(), faers.symbolic().col_ptr());
+                    assert_eq!(permuted.pattern.row_idx(), faers.symbolic().row_idx());
+                    let bits = |v: &[c64]| -> Vec<(u64, u64)> {
+                        v.iter().map(|z| (z.re.to_bits(), z.im.to_bits())).collect()
+                    };
+                    assert_eq!(bits(&values), bits(faers.val()), "{dropped:?} {side:?}");
+                }
+            }
+        }
+    }
 
     /// Σ_j c_j² by eliminating the nodes one by one in the order of `rank` on a dense adjacency
     /// matrix: each node's later neighbours become a clique (the fill), c_j = 1 + their count.

@@ -7,10 +7,11 @@
 //! - Positions optimal for given rotations: ρ̃ = −L⁻¹ S̃ r̃ (eq. (24)), by a sparse Cholesky of the
 //!   anchored Laplacian L.
 
-use crate::linalg::factor::{Assembly, Layout, Scalar, SparseFactor};
+use crate::linalg::factor::{Assembly, Layout, Permuted, Scalar, SparseFactor};
+use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Point, Problem};
-use faer::c64;
-use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+use faer::sparse::SparseColMatRef;
+use faer::{Side, c64};
 
 /// Chordal rotations (unit modulus), r_0 = 1. `None` if the graph is not connected.
 pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
@@ -81,50 +82,37 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
     let r0 = problem.rotation_row(0);
     let dim = problem.rows() - 1;
     let at = |k: usize| if k < r0 { k } else { k - 1 };
-    // W̃'s upper triangle without the row and column of r0, taken column by column from its
-    // sorted columns (an assembly from entries sorted them again: 1.3 ms of victoriaPark's 40).
+    // W̃ y = −W̃[:, r0] · 1: the row and column of r0 move to the right-hand side.
     let upper = &problem.matrix.upper;
-    let (col_ptr, rows, vals) = (
-        upper.symbolic().col_ptr(),
-        upper.symbolic().row_idx(),
-        upper.val(),
-    );
-    let mut starts = Vec::with_capacity(dim + 1);
-    let mut kept_rows = Vec::with_capacity(vals.len());
-    let mut kept = Vec::with_capacity(vals.len());
     let mut rhs = vec![c64::new(0.0, 0.0); dim];
-    starts.push(0);
-    for b in 0..=dim {
-        for k in col_ptr[b]..col_ptr[b + 1] {
-            let (a, v) = (rows[k], vals[k]);
-            match (a == r0, b == r0) {
-                (true, true) => {}
-                // W̃ y = −W̃[:, r0] · 1: the column of r0 moves to the right-hand side.
-                (false, true) => rhs[at(a)] -= v,
-                (true, false) => rhs[at(b)] -= v.conj(),
-                (false, false) => {
-                    kept_rows.push(at(a));
-                    kept.push(v);
-                }
-            }
-        }
-        if b != r0 {
-            starts.push(kept_rows.len());
-        }
-    }
-    let matrix = SparseColMat::new(
-        SymbolicSparseColMat::new_checked(dim, dim, starts, None, kept_rows),
-        kept,
-    );
+    for_each_entry(upper, |a, b, v| match (a == r0, b == r0) {
+        (false, true) => rhs[at(a)] -= v,
+        (true, false) => rhs[at(b)] -= v.conj(),
+        _ => {}
+    });
+    // The rest of W̃, without the row and column of r0, straight in the factor's order and
+    // triangle ([`Permuted`]: the matrices faer's permutation would copy, without the copy).
     let order: Vec<usize> = problem
         .row_order()
         .into_iter()
         .filter(|&k| k != r0)
         .map(at)
         .collect();
-    let mut factor = SparseFactor::analyze_ordered(matrix.symbolic(), &order, Layout::Auto);
-    factor.llt(matrix.as_ref()).ok()?;
-    factor.solve_in_place(&mut rhs);
+    let permuted = Permuted::new(upper, &order, Side::Upper, Some(r0));
+    let factor =
+        SparseFactor::analyze_in_order(permuted.pattern.as_ref(), Side::Upper, Layout::Auto);
+    let (mut factor, permuted) = match factor.read_side() {
+        Side::Upper => (factor, permuted),
+        Side::Lower => (
+            factor.given(Side::Lower),
+            Permuted::new(upper, &order, Side::Lower, Some(r0)),
+        ),
+    };
+    let values = permuted.values_of(upper);
+    factor
+        .llt(SparseColMatRef::new(permuted.pattern.as_ref(), &values))
+        .ok()?;
+    let rhs = factor.solve_gathered(&order, |k| rhs[k]);
     let one = c64::new(1.0, 0.0);
     Some(
         std::iter::once(one)
