@@ -4,7 +4,7 @@ use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
 use faer::sparse::SparseColMat;
-use faer::{Side, c64, cx128, fx128};
+use faer::{c64, cx128, fx128};
 use std::sync::Arc;
 
 /// The sparse certificate of the scalable solver (docs/method.md §3.4). For a rank-1 estimate the
@@ -139,19 +139,7 @@ impl SparseCertifier {
         keep_permuted: bool,
     ) -> Self {
         let (factor, permuted, row_counts) = if keep_permuted {
-            let permuted = Permuted::new(upper, order, Side::Upper, None);
-            let factor = SparseFactor::analyze_in_order(
-                permuted.pattern.as_ref(),
-                Side::Upper,
-                Layout::AutoComplex,
-            );
-            let (factor, permuted) = match factor.read_side() {
-                Side::Upper => (factor, permuted),
-                Side::Lower => (
-                    factor.given(Side::Lower),
-                    Permuted::new(upper, order, Side::Lower, None),
-                ),
-            };
+            let (factor, permuted) = Permuted::analyzed(upper, order, None, Layout::AutoComplex);
             // The counts by row of the permuted matrix, back to W̃'s rows.
             let mut counts = vec![0; order.len()];
             for (k, c) in factor.row_counts().into_iter().enumerate() {

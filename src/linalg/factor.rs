@@ -1371,6 +1371,26 @@ impl Permuted {
         Permuted { pattern, slots }
     }
 
+    /// The pattern for `order` (as [`Permuted::new`]) with its factor's analysis in that order:
+    /// analyzed as the upper triangle, which faer's analysis reads, and laid out again as the
+    /// lower one where the `layout` settles on a supernodal factor (whose kernels read that).
+    pub fn analyzed(
+        upper: &SparseColMat<usize, c64>,
+        order: &[usize],
+        dropped: Option<usize>,
+        layout: Layout,
+    ) -> (SparseFactor<c64>, Self) {
+        let permuted = Self::new(upper, order, Side::Upper, dropped);
+        let factor = SparseFactor::analyze_in_order(permuted.pattern.as_ref(), Side::Upper, layout);
+        match factor.read_side() {
+            Side::Upper => (factor, permuted),
+            Side::Lower => (
+                factor.given(Side::Lower),
+                Self::new(upper, order, Side::Lower, dropped),
+            ),
+        }
+    }
+
     /// The number of the permuted matrix's stored entries.
     pub fn len(&self) -> usize {
         self.pattern.row_idx().len()

@@ -429,6 +429,17 @@ fn model_decrease(
     -(gd + 0.5 * dhd)
 }
 
+/// B_uδ_u, pose u's step over its 4p entries (translation row, then rotation rows), added to
+/// `out` (4p long): Σ_a δ_a times column a of the pose's tangent basis ([`pose_basis`]).
+fn pose_step(basis: &[f64], d: &[f64], out: &mut [f64]) {
+    let w = out.len();
+    for (a, &da) in d.iter().enumerate() {
+        for (o, b) in out.iter_mut().zip(&basis[a * w..(a + 1) * w]) {
+            *o += da * b;
+        }
+    }
+}
+
 /// δᵀHδ with H = 2Bᵀ(S ⊗ I_p)B at the point of `bases` and multipliers `lambda`, without
 /// assembling H: 2 Σ (B_uδ_u)ᵀ(S_uv ⊗ I_p)(B_vδ_v) over the pose pairs, those off the diagonal
 /// twice. The chord step's model curvature (a chord step needs no new factorization, and the
@@ -445,12 +456,8 @@ fn curvature(
     // B_uδ_u for every pose (4p entries each; none for the anchor).
     let mut moved = vec![0.0; problem.n * w];
     for u in 0..problem.n {
-        let out = &mut moved[u * w..(u + 1) * w];
-        for (a, &d) in delta[sys.offset[u]..sys.offset[u + 1]].iter().enumerate() {
-            for (o, b) in out.iter_mut().zip(&bases[u][a * w..(a + 1) * w]) {
-                *o += d * b;
-            }
-        }
+        let d = &delta[sys.offset[u]..sys.offset[u + 1]];
+        pose_step(&bases[u], d, &mut moved[u * w..(u + 1) * w]);
     }
     let mut sum = 0.0;
     for (k, &(u, v)) in problem.pairs.iter().enumerate() {
@@ -488,13 +495,8 @@ fn retract(
         if sys.dims[u] == 0 {
             continue;
         }
-        let d = &delta[sys.offset[u]..sys.offset[u + 1]];
         let mut v = vec![0.0; 4 * p];
-        for (a, &da) in d.iter().enumerate() {
-            for (vk, bk) in v.iter_mut().zip(&bases[u][a * 4 * p..(a + 1) * 4 * p]) {
-                *vk += da * bk;
-            }
-        }
+        pose_step(&bases[u], &delta[sys.offset[u]..sys.offset[u + 1]], &mut v);
         for l in 0..4 {
             let r = problem.local_row(u, l).expect("not the anchor");
             for c in 0..p {

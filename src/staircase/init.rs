@@ -10,8 +10,8 @@
 use crate::linalg::factor::{Assembly, Layout, Permuted, Scalar, SparseFactor};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Point, Problem};
+use faer::c64;
 use faer::sparse::SparseColMatRef;
-use faer::{Side, c64};
 
 /// Chordal rotations (unit modulus), r_0 = 1. `None` if the graph is not connected.
 pub fn chordal_rotations(problem: &Problem) -> Option<Vec<c64>> {
@@ -98,16 +98,7 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
         .filter(|&k| k != r0)
         .map(at)
         .collect();
-    let permuted = Permuted::new(upper, &order, Side::Upper, Some(r0));
-    let factor =
-        SparseFactor::analyze_in_order(permuted.pattern.as_ref(), Side::Upper, Layout::Auto);
-    let (mut factor, permuted) = match factor.read_side() {
-        Side::Upper => (factor, permuted),
-        Side::Lower => (
-            factor.given(Side::Lower),
-            Permuted::new(upper, &order, Side::Lower, Some(r0)),
-        ),
-    };
+    let (mut factor, permuted) = Permuted::analyzed(upper, &order, Some(r0), Layout::Auto);
     let values = permuted.values_of(upper);
     factor
         .llt(SparseColMatRef::new(permuted.pattern.as_ref(), &values))
