@@ -8,10 +8,13 @@
 //! both are read here from the numeric factor and its symbolic structure.
 
 use crate::linalg::roundoff::gamma_with;
+use crate::linalg::tree_solve::TreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky,
@@ -101,6 +104,9 @@ pub struct SparseFactor<T> {
     /// An earlier factor's values, whose pages are mapped already, for [`Self::allocate`] to
     /// reuse ([`Self::reuse`]).
     spare: Vec<T>,
+    /// The elimination tree split between two cores for the LLᴴ solves, once asked
+    /// ([`Self::solve_in_place`]): `Some(None)` where it does not pay.
+    split: Option<Option<TreeSplit>>,
 }
 
 impl<T: Scalar> SparseFactor<T> {
@@ -206,6 +212,7 @@ impl<T: Scalar> SparseFactor<T> {
             solves_only: false,
             state: State::None,
             spare: Vec::new(),
+            split: None,
         }
     }
 
@@ -426,11 +433,22 @@ impl<T: Scalar> SparseFactor<T> {
         x
     }
 
-    /// Solves A x = b in place with the last successful factorization.
+    /// Solves A x = b in place with the last successful factorization: a supernodal LLᴴ's on
+    /// two cores where its tree splits well and the second core is not busy with work built
+    /// ahead ([`TreeSplit`], the same bits as faer's own solve).
     pub fn solve_in_place(&mut self, b: &mut [T]) {
         clear_upper_avx();
         let n = self.dim();
         assert_eq!(b.len(), n);
+        if self.state == State::Llt
+            && crate::linalg::parallel::second_core_idle()
+            && self.solve_split(
+                MatMut::from_column_major_slice_mut(b, n, 1),
+                SPLIT_SOLVE_MIN_VALUES,
+            )
+        {
+            return;
+        }
         let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
         let stack = MemStack::new(&mut self.mem);
         match self.state {
@@ -450,11 +468,48 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
+    /// [`Self::solve_in_place`] of an LLᴴ by [`TreeSplit`] where the factor is supernodal, of
+    /// `min_values` values at least, and the split pays; `false` (b untouched) otherwise. The
+    /// fill-reducing permutation, if any, is applied around it as faer's solve applies it.
+    fn solve_split(&mut self, mut b: MatMut<'_, T>, min_values: usize) -> bool {
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
+            return false;
+        };
+        let split = self
+            .split
+            .get_or_insert_with(|| TreeSplit::new(symbolic, min_values));
+        let Some(split) = split.as_ref() else {
+            return false;
+        };
+        let factor = SupernodalLltRef::new(symbolic, &self.values);
+        match self.symbolic.perm() {
+            Some(perm) => {
+                let (fwd, inv) = perm.arrays();
+                let mut x = faer::Mat::<T>::from_fn(b.nrows(), b.ncols(), |i, j| b[(fwd[i], j)]);
+                split.solve_in_place(factor, x.as_mut());
+                for j in 0..b.ncols() {
+                    for (i, &new) in inv.iter().enumerate() {
+                        b[(i, j)] = x[(new, j)];
+                    }
+                }
+            }
+            None => split.solve_in_place(factor, b),
+        }
+        true
+    }
+
     /// Solves A X = B in place for a block of right-hand sides (the columns of `b`) with the
-    /// last successful factorization: one pass over the factor for all of them.
-    pub fn solve_block_in_place(&mut self, b: MatMut<'_, T>) {
+    /// last successful factorization: one pass over the factor for all of them (a supernodal
+    /// LLᴴ's on two cores as in [`Self::solve_in_place`]).
+    pub fn solve_block_in_place(&mut self, mut b: MatMut<'_, T>) {
         clear_upper_avx();
         assert_eq!(b.nrows(), self.dim());
+        if self.state == State::Llt
+            && crate::linalg::parallel::second_core_idle()
+            && self.solve_split(b.rb_mut(), SPLIT_SOLVE_MIN_VALUES)
+        {
+            return;
+        }
         let mut mem = MemBuffer::new(
             self.symbolic
                 .solve_in_place_scratch::<T>(b.ncols(), Par::Seq),
@@ -1275,6 +1330,14 @@ fn amd_rank(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, 
 /// 10⁵ poses, 71, forcing it cost 21%).
 pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
 
+/// The stored values from which a supernodal LLᴴ's solves split its tree between two cores
+/// ([`TreeSplit`]). Measured in whole solves (Newton's, three runs each), split against faer's
+/// sequential one: torus3D (4.0·10⁶ values) 2.0-3.5 ms against 3.7-5.5, cubicle (3.9·10⁶)
+/// 2.3-3.4 against 4.2-5.4; below it they gained nothing or lost: cityTrees10000 (5.3·10⁵)
+/// 0.8-1.9 against 1.0-1.6 ms, parking-garage (5.0·10⁵) 0.37-0.84 against 0.35-0.42 ms (the
+/// second thread's start and the top set's sequential part outweigh half a solve).
+pub const SPLIT_SOLVE_MIN_VALUES: usize = 1 << 20;
+
 /// When faer merges two adjacent supernodes of n columns in all (relaxed supernodal
 /// amalgamation): where the merged block's fraction of stored zeros stays below the bound of the
 /// first (limit, bound) with n ≤ limit. Half faer's default bounds (1.0, 0.8, 0.1 and 0.05 for
@@ -1657,6 +1720,132 @@ mod tests {
             work += ((1 + later.len()) as f64).powi(2);
         }
         work
+    }
+
+    /// The LLᴴ solve split between two cores ([`TreeSplit`]) is faer's own solve to the last
+    /// bit, real and complex, one and three right-hand sides, with and without a fill-reducing
+    /// permutation of the factor's own:
+    /// a supernodal factor of a 3D grid's blocked matrix (random values, diagonally dominant),
+    /// whose tree splits into two sides below a top set that both update. (Checked to fail with
+    /// the sides' logged updates applied after the top set instead of at their places, and with
+    /// a side's rows updated in descending order.)
+    #[test]
+    fn the_split_solve_is_faers_own_to_the_bit() {
+        use crate::linalg::rng::Rng;
+        fn check<T: Scalar + crate::linalg::tree_solve::Entry>(draw: impl Fn(&mut Rng) -> T) {
+            let (block, edges) = (3, grid_edges(9, 8, 7));
+            let nodes = 9 * 8 * 7;
+            let n = block * nodes;
+            let mut rng = Rng::new(11);
+            let mut entries: Vec<(usize, usize)> = (0..n)
+                .flat_map(|i| {
+                    (i..n)
+                        .filter(move |&j| j / block == i / block)
+                        .map(move |j| (i, j))
+                })
+                .collect();
+            for &(u, v) in &edges {
+                let (u, v) = (u.min(v), u.max(v));
+                for a in 0..block {
+                    for b in 0..block {
+                        entries.push((u * block + a, v * block + b));
+                    }
+                }
+            }
+            let mut row_sums = vec![0.0; n];
+            let values: Vec<T> = entries
+                .iter()
+                .map(|&(i, j)| {
+                    if i == j {
+                        return T::zero_impl();
+                    }
+                    let v = draw(&mut rng);
+                    row_sums[i] += v.modulus();
+                    row_sums[j] += v.modulus();
+                    v
+                })
+                .collect();
+            let values: Vec<T> = entries
+                .iter()
+                .zip(values)
+                .map(|(&(i, j), v)| {
+                    if i == j {
+                        T::from_f64_impl(row_sums[i] + 1.0)
+                    } else {
+                        v
+                    }
+                })
+                .collect();
+            let rank = pose_rank(nodes, edges.iter().copied(), 1.0);
+            let order = group_ordering(&rank, &(0..n).map(|r| r / block).collect::<Vec<_>>());
+            // The same matrix in that order, for a factor without a permutation of its own.
+            let mut at = vec![0; n];
+            for (new, &old) in order.iter().enumerate() {
+                at[old] = new;
+            }
+            let (moved, moved_values): (Vec<(usize, usize)>, Vec<T>) = entries
+                .iter()
+                .zip(&values)
+                .map(|(&(i, j), &v)| match (at[i], at[j]) {
+                    (a, b) if a <= b => ((a, b), v),
+                    (a, b) => ((b, a), T::conj_impl(&v)),
+                })
+                .unzip();
+            for permuted in [false, true] {
+                let (mut assembly, mut f) = if permuted {
+                    let assembly = Assembly::<T>::new(n, &entries);
+                    let f = SparseFactor::<T>::analyze_ordered(
+                        assembly.matrix.symbolic(),
+                        &order,
+                        Layout::Supernodal,
+                    );
+                    (assembly, f)
+                } else {
+                    let assembly = Assembly::<T>::new(n, &moved);
+                    let f = SparseFactor::<T>::analyze_in_order(
+                        assembly.matrix.symbolic(),
+                        Side::Upper,
+                        Layout::Supernodal,
+                    );
+                    (assembly, f)
+                };
+                assembly.fill(if permuted { &values } else { &moved_values });
+                assert_eq!(f.symbolic.perm().is_some(), permuted);
+                f.llt(assembly.matrix.as_ref())
+                    .expect("diagonally dominant");
+                let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
+                    panic!("supernodal");
+                };
+                let split = TreeSplit::new(symbolic, 0).expect("a grid's tree splits");
+                assert!(split.sides().iter().all(|s| !s.is_empty()) && split.top() > 0);
+                for k in [1, 3] {
+                    let b: Vec<T> = (0..n * k).map(|_| draw(&mut rng)).collect();
+                    let mut faers = b.clone();
+                    let mut mem =
+                        MemBuffer::new(f.symbolic.solve_in_place_scratch::<T>(k, Par::Seq));
+                    LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(&mut faers, n, k),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                    let mut split_solve = b.clone();
+                    assert!(f.solve_split(
+                        MatMut::from_column_major_slice_mut(&mut split_solve, n, k),
+                        0
+                    ));
+                    assert!(split_solve != b);
+                    let bits = |v: &[T]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(&split_solve),
+                        bits(&faers),
+                        "permuted: {permuted}, {k} columns"
+                    );
+                }
+            }
+        }
+        check::<f64>(|rng| rng.normal());
+        check::<c64>(|rng| c64::new(rng.normal(), rng.normal()));
     }
 
     /// The edges of an a × b × c grid graph.

@@ -3,8 +3,9 @@
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
 //! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
 //! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
-//! side on two cores with the same bits as on one ([`parallel`]), and the allocator's free memory
-//! given back between phases ([`heap`]).
+//! side on two cores with the same bits as on one ([`parallel`]), a supernodal LLᴴ's solves split
+//! between two cores by subtrees of the elimination tree, faer's own bits ([`tree_solve`]), and
+//! the allocator's free memory given back between phases ([`heap`]).
 //!
 //! May use: faer, libc (the allocator) and the standard library only; nothing else of pgo.
 
@@ -15,3 +16,4 @@ pub mod parallel;
 pub mod rng;
 pub mod roundoff;
 pub mod subspace;
+pub mod tree_solve;

@@ -12,6 +12,32 @@ pub fn second_core() -> bool {
     *SECOND.get_or_init(|| std::thread::available_parallelism().is_ok_and(|c| c.get() > 1))
 }
 
+/// The tasks that [`ahead`] is running on the second core now.
+static AHEAD: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Whether a second core is there and not busy with work built [`ahead`]: where a computation
+/// can split itself between two threads without a third one competing for the two cores. The
+/// answer may change from call to call; a caller's results must not depend on it.
+pub fn second_core_idle() -> bool {
+    second_core() && AHEAD.load(std::sync::atomic::Ordering::Acquire) == 0
+}
+
+/// Counts a task in [`AHEAD`] while it lives.
+struct Busy;
+
+impl Busy {
+    fn new() -> Self {
+        AHEAD.fetch_add(1, std::sync::atomic::Ordering::AcqRel);
+        Busy
+    }
+}
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        AHEAD.fetch_sub(1, std::sync::atomic::Ordering::AcqRel);
+    }
+}
+
 /// Starts faer's dense products on a detached thread of the second core, so that their one-time
 /// set-up is done while this thread parses and reads. Above nano-gemm's sizes (16³ multiply-adds),
 /// faer's first dense product reads the processor's cache sizes from the operating system (on
@@ -172,7 +198,9 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
     let (run_spare, spare) = self::spare();
     std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::channel();
+        let busy = Busy::new();
         let helper = scope.spawn(move || {
+            let _busy = busy;
             // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
             run_spare.run(spare_task);
@@ -248,6 +276,26 @@ mod tests {
         let (task, result) = spare::<u32>();
         result.forgo();
         task.run(|| panic!("forgone"));
+    }
+
+    /// While [`ahead`] runs a task on the second core, that core does not count as idle (for
+    /// computations that would split themselves over both).
+    #[test]
+    fn the_second_core_is_busy_while_a_task_runs_ahead_there() {
+        let (go, wait) = std::sync::mpsc::channel::<()>();
+        let (busy, ()) = ahead(
+            move || {
+                let _ = wait.recv();
+            },
+            || (),
+            || (),
+            |_, _| {
+                let busy = !second_core_idle();
+                let _ = go.send(());
+                busy
+            },
+        );
+        assert!(busy);
     }
 
     /// A panic on the second thread reaches the caller.
