@@ -104,9 +104,9 @@ pub struct SparseFactor<T> {
     /// An earlier factor's values, whose pages are mapped already, for [`Self::allocate`] to
     /// reuse ([`Self::reuse`]).
     spare: Vec<T>,
-    /// The elimination tree split between two cores for the LLᴴ solves, once asked
-    /// ([`Self::solve_in_place`]): `Some(None)` where it does not pay.
-    split: Option<Option<TreeSplit>>,
+    /// The elimination tree split between two cores for the LLᴴ solves, where prepared
+    /// ([`Self::prepare_split`]).
+    split: Option<TreeSplit>,
 }
 
 impl<T: Scalar> SparseFactor<T> {
@@ -433,19 +433,16 @@ impl<T: Scalar> SparseFactor<T> {
         x
     }
 
-    /// Solves A x = b in place with the last successful factorization: a supernodal LLᴴ's on
-    /// two cores where its tree splits well and the second core is not busy with work built
-    /// ahead ([`TreeSplit`], the same bits as faer's own solve).
+    /// Solves A x = b in place with the last successful factorization: an LLᴴ's on two cores
+    /// where its tree's split is prepared ([`Self::prepare_split`]) and the second core is not
+    /// busy with work built ahead (the same bits as faer's own solve).
     pub fn solve_in_place(&mut self, b: &mut [T]) {
         clear_upper_avx();
         let n = self.dim();
         assert_eq!(b.len(), n);
         if self.state == State::Llt
             && crate::linalg::parallel::second_core_idle()
-            && self.solve_split(
-                MatMut::from_column_major_slice_mut(b, n, 1),
-                SPLIT_SOLVE_MIN_VALUES,
-            )
+            && self.solve_split(MatMut::from_column_major_slice_mut(b, n, 1))
         {
             return;
         }
@@ -468,17 +465,32 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
-    /// [`Self::solve_in_place`] of an LLᴴ by [`TreeSplit`] where the factor is supernodal, of
-    /// `min_values` values at least, and the split pays; `false` (b untouched) otherwise. The
-    /// fill-reducing permutation, if any, is applied around it as faer's solve applies it.
-    fn solve_split(&mut self, mut b: MatMut<'_, T>, min_values: usize) -> bool {
-        let SymbolicCholeskyRaw::Supernodal(symbolic) = self.symbolic.raw() else {
-            return false;
+    /// Splits the elimination tree between two cores for the LLᴴ solves ([`TreeSplit`]) where
+    /// there is a second core, the factor is supernodal and holds [`SPLIT_SOLVE_MIN_VALUES`]
+    /// values at least. For the factors solved many times (the Newton systems'), with their
+    /// analysis: before the factorizations' peak of memory, which its working arrays would
+    /// otherwise add to (at 10⁶ poses).
+    pub fn prepare_split(&mut self) {
+        if crate::linalg::parallel::second_core() {
+            self.prepare_split_from(SPLIT_SOLVE_MIN_VALUES);
+        }
+    }
+
+    /// [`Self::prepare_split`] from `min_values` stored values.
+    fn prepare_split_from(&mut self, min_values: usize) {
+        self.split = match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(symbolic) => TreeSplit::new(symbolic, min_values),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
         };
-        let split = self
-            .split
-            .get_or_insert_with(|| TreeSplit::new(symbolic, min_values));
-        let Some(split) = split.as_ref() else {
+    }
+
+    /// [`Self::solve_in_place`] of an LLᴴ by its [`TreeSplit`], if one is prepared; `false` (b
+    /// untouched) otherwise. The fill-reducing permutation, if any, is applied around it as
+    /// faer's solve applies it.
+    fn solve_split(&mut self, mut b: MatMut<'_, T>) -> bool {
+        let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
+            (self.symbolic.raw(), self.split.as_ref())
+        else {
             return false;
         };
         let factor = SupernodalLltRef::new(symbolic, &self.values);
@@ -506,7 +518,7 @@ impl<T: Scalar> SparseFactor<T> {
         assert_eq!(b.nrows(), self.dim());
         if self.state == State::Llt
             && crate::linalg::parallel::second_core_idle()
-            && self.solve_split(b.rb_mut(), SPLIT_SOLVE_MIN_VALUES)
+            && self.solve_split(b.rb_mut())
         {
             return;
         }
@@ -1818,6 +1830,7 @@ mod tests {
                 };
                 let split = TreeSplit::new(symbolic, 0).expect("a grid's tree splits");
                 assert!(split.sides().iter().all(|s| !s.is_empty()) && split.top() > 0);
+                f.prepare_split_from(0);
                 for k in [1, 3] {
                     let b: Vec<T> = (0..n * k).map(|_| draw(&mut rng)).collect();
                     let mut faers = b.clone();
@@ -1830,10 +1843,11 @@ mod tests {
                         MemStack::new(&mut mem),
                     );
                     let mut split_solve = b.clone();
-                    assert!(f.solve_split(
-                        MatMut::from_column_major_slice_mut(&mut split_solve, n, k),
-                        0
-                    ));
+                    assert!(f.solve_split(MatMut::from_column_major_slice_mut(
+                        &mut split_solve,
+                        n,
+                        k
+                    )));
                     assert!(split_solve != b);
                     let bits = |v: &[T]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>();
                     assert_eq!(

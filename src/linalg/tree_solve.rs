@@ -47,10 +47,10 @@ const TOP: u8 = 2;
 pub struct TreeSplit {
     /// Per supernode: its side (0 or 1), or [`TOP`].
     owner: Vec<u8>,
-    /// Per row of the factor: whether its supernode is in the top set.
-    top_row: Vec<bool>,
+    /// Per row of the factor, a bit: whether its supernode is in the top set.
+    top_row: Vec<u64>,
     /// The supernodes of each side, ascending.
-    sides: [Vec<usize>; 2],
+    sides: [Vec<u32>; 2],
 }
 
 /// A candidate split of [`TreeSplit::new`].
@@ -78,42 +78,56 @@ impl TreeSplit {
         let n = symbolic.nrows();
         let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
         let pattern = |s: usize| symbolic.supernode(s).pattern();
-        let mut supernode_of = vec![0usize; n];
-        for s in 0..ns {
-            supernode_of[begin[s]..end[s]].fill(s);
-        }
-        // The elimination tree of the supernodes: a supernode's parent holds the first row
-        // below its diagonal block, an index above its own.
-        let mut parent = vec![usize::MAX; ns];
-        let mut weight = vec![0.0f64; ns];
-        for s in 0..ns {
+        let weight = |s: usize| {
             let cols = end[s] - begin[s];
-            weight[s] = ((cols + pattern(s).len()) * cols) as f64;
-            if let Some(&first) = pattern(s).iter().min() {
-                parent[s] = supernode_of[first];
-                if parent[s] <= s {
-                    return None;
-                }
-            }
-        }
-        let total: f64 = weight.iter().sum();
-        if total < min_values as f64 {
+            ((cols + pattern(s).len()) * cols) as f64
+        };
+        let total: f64 = (0..ns).map(weight).sum();
+        if total < min_values as f64 || u32::try_from(ns).is_err() {
             return None;
         }
-        let mut subtree = weight.clone();
-        for s in 0..ns {
-            if parent[s] != usize::MAX {
-                subtree[parent[s]] += subtree[s];
+        // The elimination tree of the supernodes: a supernode's parent holds the first row
+        // below its diagonal block, an index above its own. (Its working arrays are per
+        // supernode, none per row: at 10⁶ poses this is built beside the Newton system's peak.)
+        const ROOT: u32 = u32::MAX;
+        let mut parent = vec![ROOT; ns];
+        for (s, parent) in parent.iter_mut().enumerate() {
+            if let Some(&first) = pattern(s).iter().min() {
+                let p = end.partition_point(|&e| e <= first);
+                if p <= s || p >= ns {
+                    return None;
+                }
+                *parent = p as u32;
             }
         }
-        let mut children: Vec<Vec<usize>> = vec![Vec::new(); ns];
+        let mut subtree: Vec<f64> = (0..ns).map(weight).collect();
+        for s in 0..ns {
+            if parent[s] != ROOT {
+                subtree[parent[s] as usize] += subtree[s];
+            }
+        }
+        // Each supernode's children, in one array by parent.
+        let mut child_start = vec![0u32; ns + 1];
+        for &p in parent.iter().filter(|&&p| p != ROOT) {
+            child_start[p as usize + 1] += 1;
+        }
+        for s in 0..ns {
+            child_start[s + 1] += child_start[s];
+        }
+        let mut next = child_start.clone();
+        let mut children = vec![0u32; child_start[ns] as usize];
         let mut open: Vec<usize> = Vec::new();
         for (s, &p) in parent.iter().enumerate() {
-            match p {
-                usize::MAX => open.push(s),
-                p => children[p].push(s),
+            if p == ROOT {
+                open.push(s);
+            } else {
+                children[next[p as usize] as usize] = s as u32;
+                next[p as usize] += 1;
             }
         }
+        drop(next);
+        let children_of =
+            |s: usize| &children[child_start[s] as usize..child_start[s + 1] as usize];
         let mut top = vec![false; ns];
         let mut top_weight = 0.0;
         let mut best: Option<Dealt> = None;
@@ -143,8 +157,8 @@ impl TreeSplit {
             }
             let heaviest = open.remove(0);
             top[heaviest] = true;
-            top_weight += weight[heaviest];
-            open.extend_from_slice(&children[heaviest]);
+            top_weight += weight(heaviest);
+            open.extend(children_of(heaviest).iter().map(|&c| c as usize));
         }
         let Dealt {
             estimate,
@@ -161,11 +175,21 @@ impl TreeSplit {
         // Below a dealt subtree's root, each supernode is on its parent's side.
         for s in (0..ns).rev() {
             if !top[s] && owner[s] == TOP {
-                owner[s] = owner[parent[s]];
+                owner[s] = owner[parent[s] as usize];
             }
         }
-        let sides = [0u8, 1].map(|side| (0..ns).filter(|&s| owner[s] == side).collect());
-        let top_row = (0..n).map(|r| owner[supernode_of[r]] == TOP).collect();
+        let sides = [0u8, 1].map(|side| {
+            (0..ns)
+                .filter(|&s| owner[s] == side)
+                .map(|s| s as u32)
+                .collect()
+        });
+        let mut top_row = vec![0u64; n.div_ceil(64)];
+        for s in (0..ns).filter(|&s| owner[s] == TOP) {
+            for r in begin[s]..end[s] {
+                top_row[r / 64] |= 1 << (r % 64);
+            }
+        }
         Some(TreeSplit {
             owner,
             top_row,
@@ -174,8 +198,13 @@ impl TreeSplit {
     }
 
     /// The supernodes of each side.
-    pub fn sides(&self) -> &[Vec<usize>; 2] {
+    pub fn sides(&self) -> &[Vec<u32>; 2] {
         &self.sides
+    }
+
+    /// Whether row `r`'s supernode is in the top set.
+    fn is_top_row(&self, r: usize) -> bool {
+        self.top_row[r / 64] >> (r % 64) & 1 == 1
     }
 
     /// The number of supernodes in the top set.
@@ -207,8 +236,8 @@ impl TreeSplit {
             let mut log = Vec::new();
             if forward {
                 for &s in &self.sides[side] {
-                    step.forward(s, |row, t| {
-                        if self.top_row[row] {
+                    step.forward(s as usize, |row, t| {
+                        if self.is_top_row(row) {
                             log.push(t);
                             false
                         } else {
@@ -218,7 +247,7 @@ impl TreeSplit {
                 }
             } else {
                 for &s in self.sides[side].iter().rev() {
-                    step.backward(s);
+                    step.backward(s as usize);
                 }
             }
             log
@@ -237,7 +266,7 @@ impl TreeSplit {
                     let pattern = symbolic.supernode(s).pattern();
                     for j in 0..shared.k {
                         for &row in pattern {
-                            if self.top_row[row] {
+                            if self.is_top_row(row) {
                                 // SAFETY: one thread here; (row, j) is inside x.
                                 unsafe { shared.subtract(row, j, logs[side][next[side]]) };
                                 next[side] += 1;

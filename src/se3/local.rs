@@ -189,11 +189,12 @@ impl System {
         // public 3D files (9 on tinyGrid3D's 9 poses), far above its crossover of 12.
         let layout = Layout::Supernodal;
         let assembly = Assembly::blocked(&dims, &problem.pairs, &poses, layout.stored_side());
-        let factor = SparseFactor::analyze_in_order(
+        let mut factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
             layout.stored_side(),
             layout,
         );
+        factor.prepare_split();
         System {
             p,
             offset,

@@ -350,10 +350,11 @@ impl NewtonSystem {
             Side::Upper,
             Layout::AutoNewton,
         );
-        let (assembly, factor) = match factor.read_side() {
+        let (assembly, mut factor) = match factor.read_side() {
             Side::Upper => (assembly, factor),
             Side::Lower => (assembly.transposed(), factor.given(Side::Lower)),
         };
+        factor.prepare_split();
         NewtonSystem {
             assembly,
             factor,
