@@ -171,6 +171,23 @@ pub fn spare<T>() -> (SpareTask<T>, Spare<T>) {
     )
 }
 
+/// `(f(0..n/2), f(n/2..n))`: the upper half on the second core where it is idle
+/// ([`second_core_idle`]) and `n` is at least `min`, else both here, lower first. For items
+/// computed each by itself whose results the caller joins in order (the lower half's, then the
+/// upper half's): the same split on one core or two, so the same results.
+pub fn halves<R: Send>(
+    n: usize,
+    min: usize,
+    f: impl Fn(std::ops::Range<usize>) -> R + Sync,
+) -> (R, R) {
+    let mid = n / 2;
+    if n >= min && second_core_idle() {
+        join(|| f(0..mid), || f(mid..n))
+    } else {
+        (f(0..mid), f(mid..n))
+    }
+}
+
 /// `(main(ready, spare), then())` with `first`, then `spare_task` unless `main` has claimed it
 /// first ([`Spare`]), then `then` in that order on a second core when [`second_core`]:
 /// `ready.take()` waits for `first`'s result and hands it over ([`Ready`]); on one core neither
@@ -296,6 +313,18 @@ mod tests {
             },
         );
         assert!(busy);
+    }
+
+    /// Both halves of the range, each once, lower first, whatever the threshold and the core
+    /// count.
+    #[test]
+    fn halves_cover_the_range_in_order() {
+        for (n, min) in [(0, 0), (1, 0), (7, 0), (1000, 0), (1000, usize::MAX)] {
+            let (lower, upper) = halves(n, min, |r| r.collect::<Vec<_>>());
+            assert_eq!(lower.len(), n / 2);
+            let all: Vec<usize> = lower.into_iter().chain(upper).collect();
+            assert_eq!(all, (0..n).collect::<Vec<_>>());
+        }
     }
 
     /// A panic on the second thread reaches the caller.
