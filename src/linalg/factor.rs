@@ -1735,8 +1735,8 @@ mod tests {
     }
 
     /// The LLᴴ solve split between two cores ([`TreeSplit`]) is faer's own solve to the last
-    /// bit, real and complex, one and three right-hand sides, with and without a fill-reducing
-    /// permutation of the factor's own:
+    /// bit, real and complex, one and three right-hand sides (stored by columns and by rows),
+    /// with and without a fill-reducing permutation of the factor's own:
     /// a supernodal factor of a 3D grid's blocked matrix (random values, diagonally dominant),
     /// whose tree splits into two sides below a top set that both update. (Checked to fail with
     /// the sides' logged updates applied after the top set instead of at their places, and with
@@ -1854,6 +1854,21 @@ mod tests {
                         bits(&split_solve),
                         bits(&faers),
                         "permuted: {permuted}, {k} columns"
+                    );
+                    // The same right-hand sides stored by rows (a row stride of k).
+                    let mut by_rows = b.clone();
+                    let mut faers_by_rows = b.clone();
+                    LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_row_major_slice_mut(&mut faers_by_rows, n, k),
+                        Par::Seq,
+                        MemStack::new(&mut mem),
+                    );
+                    assert!(f.solve_split(MatMut::from_row_major_slice_mut(&mut by_rows, n, k)));
+                    assert_eq!(
+                        bits(&by_rows),
+                        bits(&faers_by_rows),
+                        "by rows, permuted: {permuted}, {k} columns"
                     );
                 }
             }

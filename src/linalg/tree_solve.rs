@@ -225,6 +225,7 @@ impl TreeSplit {
         let shared = Shared {
             ptr: x.as_ptr_mut(),
             k: x.ncols(),
+            row_stride: x.row_stride(),
             col_stride: x.col_stride(),
         };
         let max_pattern = (0..symbolic.n_supernodes())
@@ -292,6 +293,7 @@ impl TreeSplit {
 struct Shared<T> {
     ptr: *mut T,
     k: usize,
+    row_stride: isize,
     col_stride: isize,
 }
 
@@ -306,7 +308,18 @@ impl<T: Entry> Shared<T> {
     /// # Safety
     /// In bounds, and not written by another thread meanwhile.
     unsafe fn get(&self, row: usize, j: usize) -> T {
-        unsafe { *self.ptr.offset(row as isize + j as isize * self.col_stride) }
+        unsafe { *self.at(row, j) }
+    }
+
+    /// The address of entry (row, j).
+    ///
+    /// # Safety
+    /// In bounds.
+    unsafe fn at(&self, row: usize, j: usize) -> *mut T {
+        unsafe {
+            self.ptr
+                .offset(row as isize * self.row_stride + j as isize * self.col_stride)
+        }
     }
 
     /// x(row, j) −= t, as faer's solve subtracts.
@@ -314,10 +327,7 @@ impl<T: Entry> Shared<T> {
     /// # Safety
     /// In bounds, and not read or written by another thread meanwhile.
     unsafe fn subtract(&self, row: usize, j: usize, t: T) {
-        unsafe {
-            let p = self.ptr.offset(row as isize + j as isize * self.col_stride);
-            *p -= t;
-        }
+        unsafe { *self.at(row, j) -= t }
     }
 
     /// The rows `start..start + size` as a matrix.
@@ -325,7 +335,15 @@ impl<T: Entry> Shared<T> {
     /// # Safety
     /// In bounds, and not touched by another thread while the view lives.
     unsafe fn rows(&self, start: usize, size: usize) -> MatMut<'_, T> {
-        unsafe { MatMut::from_raw_parts_mut(self.ptr.add(start), size, self.k, 1, self.col_stride) }
+        unsafe {
+            MatMut::from_raw_parts_mut(
+                self.at(start, 0),
+                size,
+                self.k,
+                self.row_stride,
+                self.col_stride,
+            )
+        }
     }
 }
 
