@@ -283,20 +283,6 @@ impl<T: Scalar> SparseFactor<T> {
         self.symbolic.len_val()
     }
 
-    /// Room for `len` values, every page of it written once, for [`Self::reuse`]: made ahead on
-    /// the second core, it takes a first factorization's page faults off the thread that
-    /// factors (torus3D's first Newton LLᵀ took 43 ms on fresh pages, the second 30 ms).
-    pub fn mapped_room(len: usize) -> Vec<T> {
-        // Zeroed memory may come unmapped from the system (calloc): one write per page maps it,
-        // of a value the compiler cannot know to be the zero already there.
-        let mut room = vec![T::zero_impl(); len];
-        let per_page = (4096 / std::mem::size_of::<T>().max(1)).max(1);
-        for value in room.iter_mut().step_by(per_page) {
-            *value = std::hint::black_box(T::zero_impl());
-        }
-        room
-    }
-
     /// Frees the numeric factor and the workspace but keeps the analysis (the next factorization
     /// allocates them again): for a factor kept for later while others take the memory.
     pub fn release(&mut self) {

@@ -217,7 +217,7 @@ impl System {
         *self.offset.last().unwrap()
     }
 
-    /// The number of values of its factor ([`SparseFactor::mapped_room`]).
+    /// The number of values of its factor (the room of [`crate::linalg::heap::Room`]).
     pub fn values_len(&self) -> usize {
         self.factor.values_len()
     }

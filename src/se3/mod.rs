@@ -31,7 +31,7 @@ pub mod stiefel;
 
 use crate::error::Error;
 use crate::graph3::Graph3;
-use crate::linalg::factor::SparseFactor;
+use crate::linalg::heap::Room;
 use certificate::{Bound3, Certifier3};
 use local::{LocalOptions, Step3, System, Translations, optimize, optimize_with};
 use problem::{Point3, Problem3, Weight3};
@@ -202,29 +202,26 @@ pub fn solve_graph3_from(
     // factor, for that projection, is a spare task that whichever thread comes to it first
     // computes. Each is computed as it would be here: the same bits on one core or two. Before
     // the certificate's analysis, which is needed only after Newton, the second core maps the
-    // pages of the room for the Newton factor's values (another spare task), which the first
-    // factorization would otherwise fault in one by one on this thread (torus3D: its first LLᵀ
-    // took 43 ms, the second 30 ms).
-    let values = std::sync::atomic::AtomicUsize::new(0);
-    let (map_room, room) = crate::linalg::parallel::spare();
+    // pages of the room for the Newton factor's values ([`Room`]), which the first factorization
+    // would otherwise fault in one by one on this thread (torus3D: its first LLᵀ took 43 ms, the
+    // second 30 ms); where this thread comes to it first, it maps the chunks left itself.
+    let room = Room::new();
     let ((mut translations, mut first), mut certifier) = crate::linalg::parallel::ahead(
         || {
             let system = System::new(&problem, 3);
-            values.store(system.values_len(), std::sync::atomic::Ordering::Release);
+            room.prepare(system.values_len());
             system
         },
         || Translations::new(&problem),
         || {
-            map_room.run(|| {
-                SparseFactor::mapped_room(values.load(std::sync::atomic::Ordering::Acquire))
-            });
+            room.map();
             Certifier3::new(&problem)
         },
         |system, translations| {
             let descent = descend(
                 &|| translations.take(|| Translations::new(&problem)),
                 &|| system.take(),
-                &|| room.take(Vec::new),
+                &|| room.take(),
                 report,
             );
             // Not mapped for nothing where no factorization asked for it (on one core, always).

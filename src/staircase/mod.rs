@@ -32,6 +32,7 @@ pub mod manifold;
 use crate::certify::{HiddenGap, SparseBound, SparseCertifier};
 use crate::graph::{Pose2, PoseGraph};
 use crate::linalg::factor::SparseFactor;
+use crate::linalg::heap::{RELEASE_FROM_ROWS, Room};
 use crate::problem::rank_p::{Point, Problem};
 use crate::problem::weights::EdgeWeight;
 use faer::c64;
@@ -792,11 +793,22 @@ fn solve_from_start(
     // graph), this thread where it is quick (the rotations' alone). Then the certificate's
     // analysis (city10000: 11 ms). Each is computed as it would be here, so the results are the
     // same bits on one core or two. The certificate's factor allocates its values at its first
-    // factorization, after Newton's gave its memory back.
+    // factorization, after Newton's gave its memory back. Before the certificate's analysis the
+    // second core maps the pages of the first Newton factorization's values ([`Room`]), which
+    // this thread joins where it comes to them first (below [`RELEASE_FROM_ROWS`] Newton rows:
+    // at 10⁶ poses they would be held beside the start's own peak).
+    let room = Room::new();
     let ((mut positions, local, mut rank_one), certifier) = crate::linalg::parallel::ahead(
-        || NewtonSystem::new(problem, 1),
+        || {
+            let system = NewtonSystem::new(problem, 1);
+            if system.factor.dim() < RELEASE_FROM_ROWS {
+                room.prepare(system.factor.values_len());
+            }
+            system
+        },
         || OptimalPositions::new(problem),
         || {
+            room.map();
             options
                 .certify
                 .then(|| SparseCertifier::new(&problem.matrix.upper, &problem.row_order()))
@@ -812,10 +824,17 @@ fn solve_from_start(
                     s,
                     positions.as_mut(),
                     &mut rank_one,
-                    &|| system.take(),
+                    &|| {
+                        system.take().map(|mut system| {
+                            system.factor.reuse(room.take());
+                            system
+                        })
+                    },
                     observer,
                 )
             });
+            // Not mapped for nothing where no system came from the second core.
+            room.forgo();
             (positions, local, rank_one)
         },
     );
