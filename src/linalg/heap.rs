@@ -1,4 +1,5 @@
-//! Giving the allocator's free memory back to the system between the phases of a large solve.
+//! The allocator's memory between the phases of a solve: free pages given back to the system
+//! ([`release_free_memory`], [`release_for`]), and a factor's room mapped ahead ([`Room`]).
 //!
 //! A Newton step at 10⁶ poses allocates and frees vectors of 8 to 31 MB (the trial point, the
 //! gradient and its coordinates, the positions' right-hand side); glibc's malloc keeps such

@@ -5,7 +5,8 @@
 //! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
 //! side on two cores with the same bits as on one ([`parallel`]), a supernodal LLᴴ's solves split
 //! between two cores by subtrees of the elimination tree, faer's own bits ([`tree_solve`]), and
-//! the allocator's free memory given back between phases ([`heap`]).
+//! the allocator's free memory given back between phases with a factor's room mapped by two
+//! threads together ([`heap`]).
 //!
 //! May use: faer, libc (the allocator) and the standard library only; nothing else of pgo.
 
