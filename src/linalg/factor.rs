@@ -426,8 +426,7 @@ impl<T: Scalar> SparseFactor<T> {
         clear_upper_avx();
         let n = self.dim();
         assert_eq!(b.len(), n);
-        if self.state == State::Llt
-            && crate::linalg::parallel::second_core_idle()
+        if crate::linalg::parallel::second_core_idle()
             && self.solve_split(MatMut::from_column_major_slice_mut(b, n, 1))
         {
             return;
@@ -470,12 +469,12 @@ impl<T: Scalar> SparseFactor<T> {
         };
     }
 
-    /// [`Self::solve_in_place`] of an LLᴴ by its [`TreeSplit`], if one is prepared; `false` (b
-    /// untouched) otherwise. The fill-reducing permutation, if any, is applied around it as
-    /// faer's solve applies it.
+    /// [`Self::solve_in_place`] by the [`TreeSplit`] where one is prepared and the last
+    /// factorization is an LLᴴ; `false` (b untouched) otherwise. The fill-reducing permutation,
+    /// if any, is applied around it as faer's solve applies it.
     fn solve_split(&mut self, mut b: MatMut<'_, T>) -> bool {
-        let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
-            (self.symbolic.raw(), self.split.as_ref())
+        let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split), State::Llt) =
+            (self.symbolic.raw(), self.split.as_ref(), self.state)
         else {
             return false;
         };
@@ -502,10 +501,7 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn solve_block_in_place(&mut self, mut b: MatMut<'_, T>) {
         clear_upper_avx();
         assert_eq!(b.nrows(), self.dim());
-        if self.state == State::Llt
-            && crate::linalg::parallel::second_core_idle()
-            && self.solve_split(b.rb_mut())
-        {
+        if crate::linalg::parallel::second_core_idle() && self.solve_split(b.rb_mut()) {
             return;
         }
         let mut mem = MemBuffer::new(

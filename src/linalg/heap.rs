@@ -54,17 +54,18 @@ pub struct Room {
 
 enum RoomState {
     Waiting,
-    /// Allocated: the values, the address of their first, and their number of chunks.
-    Ready {
-        values: Vec<f64>,
-        first: usize,
-        chunks: usize,
-    },
+    /// Allocated, not yet taken.
+    Ready(Vec<f64>),
     Taken,
 }
 
 /// Bytes mapped per claim of [`Room::map`]: 64 pages, about 80 µs of page faults.
 const CHUNK: usize = 64 * 4096;
+
+/// The number of [`CHUNK`]s of a room of `len` values.
+fn chunks(len: usize) -> usize {
+    (len * std::mem::size_of::<f64>()).div_ceil(CHUNK)
+}
 
 impl Default for Room {
     fn default() -> Self {
@@ -92,31 +93,21 @@ impl Room {
     pub fn prepare(&self, len: usize) {
         let mut state = self.state();
         if let RoomState::Waiting = *state {
-            let mut values = vec![0.0f64; len];
-            let first = values.as_mut_ptr() as usize;
-            let chunks = (len * std::mem::size_of::<f64>()).div_ceil(CHUNK);
-            *state = RoomState::Ready {
-                values,
-                first,
-                chunks,
-            };
+            *state = RoomState::Ready(vec![0.0f64; len]);
         }
     }
 
     /// Maps the pages of the chunks not yet claimed, one claim at a time.
     pub fn map(&self) {
-        let (first, chunks, bytes) = match &*self.state() {
-            RoomState::Ready {
-                values,
-                first,
-                chunks,
-            } => (*first, *chunks, std::mem::size_of_val(values.as_slice())),
+        let (first, len) = match &mut *self.state() {
+            RoomState::Ready(values) => (values.as_mut_ptr() as usize, values.len()),
             _ => return,
         };
+        let (count, bytes) = (chunks(len), len * std::mem::size_of::<f64>());
         use std::sync::atomic::Ordering;
         loop {
             let c = self.next.fetch_add(1, Ordering::AcqRel);
-            if c >= chunks {
+            if c >= count {
                 return;
             }
             let end = ((c + 1) * CHUNK).min(bytes);
@@ -139,10 +130,10 @@ impl Room {
     /// The room, its unclaimed chunks mapped here and the claimed ones waited for; an empty
     /// vector where none was prepared (and then none will be).
     pub fn take(&self) -> Vec<f64> {
-        let chunks = {
+        let count = {
             let mut state = self.state();
             match &*state {
-                RoomState::Ready { chunks, .. } => *chunks,
+                RoomState::Ready(values) => chunks(values.len()),
                 _ => {
                     *state = RoomState::Taken;
                     return Vec::new();
@@ -150,11 +141,11 @@ impl Room {
             }
         };
         self.map();
-        while self.done.load(std::sync::atomic::Ordering::Acquire) < chunks {
+        while self.done.load(std::sync::atomic::Ordering::Acquire) < count {
             std::thread::yield_now();
         }
         match std::mem::replace(&mut *self.state(), RoomState::Taken) {
-            RoomState::Ready { values, .. } => values,
+            RoomState::Ready(values) => values,
             _ => Vec::new(),
         }
     }

@@ -829,9 +829,7 @@ mod tests {
             assert!(polar_rows(&mut x.x[r0 * p..(r0 + 3) * p], p));
         }
         let qx = apply_q(problem, &x);
-        let bases = (0..problem.n)
-            .map(|u| pose_basis(problem, &x, u, p))
-            .collect();
+        let bases = pose_bases(problem, &x);
         (x, qx, bases)
     }
 
