@@ -14,7 +14,7 @@
 //! ```
 
 use faer::prelude::*;
-use faer::{Mat, Par, Side, c64};
+use faer::{Mat, Side, c64};
 use pgo::dual::ipm::{self, IpmOptions};
 use std::time::{Duration, Instant};
 
@@ -123,18 +123,14 @@ fn relative_gap(s: &pgo::dual::sdp::DualSolution) -> f64 {
     (s.primal_objective - s.dual_objective).abs() / s.dual_objective.abs().max(1.0)
 }
 
-/// Median wall time of 3 solves, with `par` (None: `ipm::solve`, sequential).
-fn median_time(m: &Mat<c64>, par: Option<Par>) -> (Duration, pgo::dual::sdp::DualSolution) {
+/// Median wall time of 3 solves.
+fn median_time(m: &Mat<c64>) -> (Duration, pgo::dual::sdp::DualSolution) {
     let options = IpmOptions::default();
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = match par {
-            Some(par) => ipm::solve_with_parallelism(m.as_ref(), &options, par),
-            None => ipm::solve(m.as_ref(), &options),
-        }
-        .expect("solve");
+        let s = ipm::solve(m.as_ref(), &options).expect("solve");
         times.push(start.elapsed());
         last = Some(s);
     }
@@ -172,20 +168,15 @@ fn main() {
         &[10, 20, 50, 100, 200, 500]
     };
     println!("random pose graphs (10 m square, σ_R = σ_Δ = 0.1), median of 3 solves");
-    println!(
-        "{:>5} {:>5} {:>12} {:>14} {:>10}",
-        "n", "iter", "time", "time(threads)", "rel. gap"
-    );
+    println!("{:>5} {:>5} {:>12} {:>10}", "n", "iter", "time", "rel. gap");
     for &n in sizes {
         let m = graph_matrix(&mut rng, n, 0.1);
-        let (t, s) = median_time(&m, None);
-        let (t_par, _) = median_time(&m, Some(Par::rayon(0)));
+        let (t, s) = median_time(&m);
         println!(
-            "{:>5} {:>5} {:>12.3?} {:>14.3?} {:>10.2e}",
+            "{:>5} {:>5} {:>12.3?} {:>10.2e}",
             n,
             s.iterations,
             t,
-            t_par,
             relative_gap(&s)
         );
     }

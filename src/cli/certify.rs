@@ -87,7 +87,6 @@ pub struct JsonReport<'a> {
 /// Entry point of the `pgo-certify` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
-    crate::linalg::parallel::warm_dense_products();
     crate::cli::run_tool("pgo-certify", || run(&args))
 }
 

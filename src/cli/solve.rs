@@ -390,7 +390,6 @@ impl<'a> Report<'a> {
 /// Entry point of the `pgo-solve` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
-    crate::linalg::parallel::warm_dense_products();
     crate::cli::run_tool("pgo-solve", || run(&args))
 }
 

@@ -96,7 +96,6 @@ pub struct JsonReport<'a> {
 /// Entry point of the `pgo-spectrum` binary.
 pub fn main() -> ExitCode {
     let args = Args::parse();
-    crate::linalg::parallel::warm_dense_products();
     crate::cli::run_tool("pgo-spectrum", || run(&args))
 }
 

@@ -153,8 +153,8 @@ const TRUNCATION_THRESHOLDS: [f64; 3] = [1e-3, 1e-6, 1e-9];
 /// Returns λ* = y (one multiplier per rotation), X* (unit diagonal, positive semidefinite), and
 /// the objectives d* = Σ λ_i and s* = Tr(M X*), which agree to the requested relative gap
 /// (strong duality, Prop. 8). Runs sequentially (`Par::Seq`): deterministic, and on the
-/// 2-core machine it was measured on, faer's threads did not help even at n = 500
-/// (`examples/sdp_bench.rs`); [`solve_with_parallelism`] takes an explicit [`Par`].
+/// 2-core machine it was measured on, faer's threads did not help even at n = 500 (faer is
+/// built without them, Cargo.toml).
 ///
 /// # Errors
 ///
@@ -164,24 +164,13 @@ const TRUNCATION_THRESHOLDS: [f64; 3] = [1e-3, 1e-6, 1e-9];
 /// iteration stalls (see "Accuracy" in the module docs); [`SdpError::Solver`] if an
 /// eigenvalue computation fails or the starting point is not dual feasible (not expected).
 pub fn solve(m: MatRef<'_, c64>, options: &IpmOptions) -> Result<DualSolution, SdpError> {
-    solve_with_parallelism(m, options, Par::Seq)
-}
-
-/// [`solve`] with an explicit faer parallelism for the dense kernels (factorizations,
-/// products, eigenvalues). In tests the result was bit-identical to the sequential one, but
-/// faer does not promise that.
-pub fn solve_with_parallelism(
-    m: MatRef<'_, c64>,
-    options: &IpmOptions,
-    par: Par,
-) -> Result<DualSolution, SdpError> {
     let n = m.nrows();
     let scale = validate(m)?;
     // Solve for M / scale: the iterates are then of order one. X is unchanged and y scales back
     // linearly.
     let scale = if scale > 0.0 { scale } else { 1.0 };
     let ms = Mat::from_fn(n, n, |i, j| (m[(i, j)] + m[(j, i)].conj()) * (0.5 / scale));
-    let mut ipm = Ipm::new(ms, par);
+    let mut ipm = Ipm::new(ms);
     let iterations = ipm.run(options, scale)?;
     Ok(ipm.into_solution(m, scale, iterations, true))
 }
@@ -199,7 +188,7 @@ pub fn solve_best_effort(
     let scale = validate(m)?;
     let scale = if scale > 0.0 { scale } else { 1.0 };
     let ms = Mat::from_fn(n, n, |i, j| (m[(i, j)] + m[(j, i)].conj()) * (0.5 / scale));
-    let mut ipm = Ipm::new(ms, Par::Seq);
+    let mut ipm = Ipm::new(ms);
     match ipm.run(options, scale) {
         Ok(iterations) => Ok(ipm.into_solution(m, scale, iterations, true)),
         Err(SdpError::NotConverged { iterations, .. }) => {
@@ -238,7 +227,6 @@ fn validate(m: MatRef<'_, c64>) -> Result<f64, SdpError> {
 /// The iterates and the workspace of one solve (all n x n unless noted).
 struct Ipm {
     n: usize,
-    par: Par,
     /// M / scale, Hermitian (both triangles).
     m: Mat<c64>,
     /// Primal iterate X ≻ 0, both triangles.
@@ -277,7 +265,7 @@ impl Ipm {
     /// The strictly feasible start: X = I and y_i = M_ii − Σ_{j≠i} |M_ij| − 1, so that
     /// Z = M − Diag(y) is strictly diagonally dominant with a unit margin, hence Z ≻ 0
     /// (Gershgorin).
-    fn new(m: Mat<c64>, par: Par) -> Self {
+    fn new(m: Mat<c64>) -> Self {
         let n = m.nrows();
         let y = (0..n)
             .map(|i| {
@@ -286,20 +274,19 @@ impl Ipm {
             })
             .collect();
         let stack = StackReq::any_of(&[
-            llt_factor::cholesky_in_place_scratch::<c64>(n, par, Default::default()),
-            llt_factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()),
-            llt_solve::solve_in_place_scratch::<f64>(n, 1, par),
+            llt_factor::cholesky_in_place_scratch::<c64>(n, Par::Seq, Default::default()),
+            llt_factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()),
+            llt_solve::solve_in_place_scratch::<f64>(n, 1, Par::Seq),
             evd::self_adjoint_evd_scratch::<c64>(
                 n,
                 ComputeEigenvectors::Yes,
-                par,
+                Par::Seq,
                 Default::default(),
             ),
         ]);
         let zeros = || Mat::<c64>::zeros(n, n);
         Self {
             n,
-            par,
             m,
             x: Mat::identity(n, n),
             lx: Mat::identity(n, n),
@@ -335,7 +322,7 @@ impl Ipm {
 
     /// Runs the predictor-corrector iteration; returns the number of Newton steps taken.
     fn run(&mut self, options: &IpmOptions, scale: f64) -> Result<usize, SdpError> {
-        if !factor_dual(&self.m, &self.y, &mut self.lz, self.par, &mut self.mem) {
+        if !factor_dual(&self.m, &self.y, &mut self.lz, &mut self.mem) {
             return Err(SdpError::Solver(
                 "the Gershgorin starting point is not dual feasible".into(),
             ));
@@ -456,7 +443,7 @@ impl Ipm {
     /// False if H is numerically not positive definite.
     fn newton_system(&mut self) -> bool {
         let n = self.n;
-        triangular_inverse::invert_lower_triangular(self.k.as_mut(), self.lz.as_ref(), self.par);
+        triangular_inverse::invert_lower_triangular(self.k.as_mut(), self.lz.as_ref(), Par::Seq);
         tri_matmul::matmul(
             self.g.as_mut(),
             BlockStructure::TriangularLower,
@@ -466,7 +453,7 @@ impl Ipm {
             self.k.as_ref(),
             BlockStructure::TriangularLower,
             c64::new(1.0, 0.0),
-            self.par,
+            Par::Seq,
         );
         for j in 0..n {
             self.g[(j, j)].im = 0.0;
@@ -482,7 +469,7 @@ impl Ipm {
         llt_factor::cholesky_in_place(
             self.h.as_mut(),
             Default::default(),
-            self.par,
+            Par::Seq,
             MemStack::new(&mut self.mem),
             Default::default(),
         )
@@ -494,7 +481,7 @@ impl Ipm {
         llt_solve::solve_in_place(
             self.h.as_ref(),
             self.rhs.as_mut(),
-            self.par,
+            Par::Seq,
             MemStack::new(&mut self.mem),
         );
     }
@@ -519,7 +506,7 @@ impl Ipm {
             self.t1.as_ref(),
             self.g.as_ref(),
             c64::new(1.0, 0.0),
-            self.par,
+            Par::Seq,
         );
         let dx = &mut self.dx;
         for j in 0..n {
@@ -542,20 +529,15 @@ impl Ipm {
         triangular_solve::solve_lower_triangular_in_place(
             self.lx.as_ref(),
             self.t1.as_mut(),
-            self.par,
+            Par::Seq,
         );
         self.t2.copy_from(self.t1.adjoint());
         triangular_solve::solve_lower_triangular_in_place(
             self.lx.as_ref(),
             self.t2.as_mut(),
-            self.par,
+            Par::Seq,
         );
-        let lambda = min_eigenvalue(
-            self.t2.as_ref(),
-            &mut self.eigenvalues,
-            self.par,
-            &mut self.mem,
-        )?;
+        let lambda = min_eigenvalue(self.t2.as_ref(), &mut self.eigenvalues, &mut self.mem)?;
         Ok(step_to_boundary(lambda))
     }
 
@@ -577,14 +559,9 @@ impl Ipm {
             self.k.adjoint(),
             BlockStructure::TriangularUpper,
             c64::new(-1.0, 0.0),
-            self.par,
+            Par::Seq,
         );
-        let lambda = min_eigenvalue(
-            self.t2.as_ref(),
-            &mut self.eigenvalues,
-            self.par,
-            &mut self.mem,
-        )?;
+        let lambda = min_eigenvalue(self.t2.as_ref(), &mut self.eigenvalues, &mut self.mem)?;
         Ok(step_to_boundary(lambda))
     }
 
@@ -602,7 +579,7 @@ impl Ipm {
             if llt_factor::cholesky_in_place(
                 self.lx.as_mut(),
                 Default::default(),
-                self.par,
+                Par::Seq,
                 MemStack::new(&mut self.mem),
                 Default::default(),
             )
@@ -628,13 +605,13 @@ impl Ipm {
             for ((y, &y0), &dy) in self.y.iter_mut().zip(&y_old).zip(&self.dy) {
                 *y = y0 + alpha_d * dy;
             }
-            if factor_dual(&self.m, &self.y, &mut self.lz, self.par, &mut self.mem) {
+            if factor_dual(&self.m, &self.y, &mut self.lz, &mut self.mem) {
                 return true;
             }
             alpha_d *= 0.8;
         }
         self.y = y_old;
-        factor_dual(&self.m, &self.y, &mut self.lz, self.par, &mut self.mem)
+        factor_dual(&self.m, &self.y, &mut self.lz, &mut self.mem)
     }
 
     /// Tries the rounded points of the module docs ("Polishing") and keeps them where they
@@ -649,7 +626,7 @@ impl Ipm {
             self.x.as_ref(),
             self.eigenvalues.as_mut(),
             Some(self.t1.as_mut()),
-            self.par,
+            Par::Seq,
             MemStack::new(&mut self.mem),
             Default::default(),
         )
@@ -710,17 +687,12 @@ impl Ipm {
             }
             self.t2[(j, j)] -= yj;
         }
-        let lambda_min = min_eigenvalue(
-            self.t2.as_ref(),
-            &mut self.eigenvalues,
-            self.par,
-            &mut self.mem,
-        )?;
+        let lambda_min = min_eigenvalue(self.t2.as_ref(), &mut self.eigenvalues, &mut self.mem)?;
         let mut margin = f64::EPSILON * n as f64;
         for _ in 0..4 {
             let shift = (-lambda_min).max(0.0) + margin;
             let shifted: Vec<f64> = y.iter().map(|v| v - shift).collect();
-            if factor_dual(&self.m, &shifted, &mut self.t2, self.par, &mut self.mem) {
+            if factor_dual(&self.m, &shifted, &mut self.t2, &mut self.mem) {
                 y = shifted;
                 let dual: f64 = y.iter().sum();
                 if self.polished_y.as_ref().is_none_or(|b| dual > b.0) {
@@ -808,7 +780,7 @@ fn inner(a: MatRef<'_, c64>, b: MatRef<'_, c64>) -> f64 {
 }
 
 /// Writes Z = M − Diag(y) (lower triangle) into `lz` and factors it; false if not Z ≻ 0.
-fn factor_dual(m: &Mat<c64>, y: &[f64], lz: &mut Mat<c64>, par: Par, mem: &mut MemBuffer) -> bool {
+fn factor_dual(m: &Mat<c64>, y: &[f64], lz: &mut Mat<c64>, mem: &mut MemBuffer) -> bool {
     let n = m.nrows();
     for j in 0..n {
         for i in j..n {
@@ -819,7 +791,7 @@ fn factor_dual(m: &Mat<c64>, y: &[f64], lz: &mut Mat<c64>, par: Par, mem: &mut M
     llt_factor::cholesky_in_place(
         lz.as_mut(),
         Default::default(),
-        par,
+        Par::Seq,
         MemStack::new(mem),
         Default::default(),
     )
@@ -830,14 +802,13 @@ fn factor_dual(m: &Mat<c64>, y: &[f64], lz: &mut Mat<c64>, par: Par, mem: &mut M
 fn min_eigenvalue(
     a: MatRef<'_, c64>,
     s: &mut Diag<c64>,
-    par: Par,
     mem: &mut MemBuffer,
 ) -> Result<f64, SdpError> {
     evd::self_adjoint_evd(
         a,
         s.as_mut(),
         None,
-        par,
+        Par::Seq,
         MemStack::new(mem),
         Default::default(),
     )
@@ -1397,16 +1368,5 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
-    }
-
-    #[test]
-    fn parallel_and_sequential_agree() {
-        let mut rng = Rng(11);
-        let m = random_hermitian(&mut rng, 60);
-        let options = IpmOptions::default();
-        let a = solve_with_parallelism(m.as_ref(), &options, Par::Seq).unwrap();
-        let b = solve_with_parallelism(m.as_ref(), &options, Par::rayon(2)).unwrap();
-        assert!((a.dual_objective - b.dual_objective).abs() <= 1e-9 * a.dual_objective.abs());
-        assert_optimal_pair(m.as_ref(), &b, 1e-10);
     }
 }

@@ -38,37 +38,6 @@ impl Drop for Busy {
     }
 }
 
-/// Starts faer's dense products on a detached thread of the second core, so that their one-time
-/// set-up is done while this thread parses and reads. Above nano-gemm's sizes (16³ multiply-adds),
-/// faer's first dense product reads the processor's cache sizes from the operating system (on
-/// Linux, a hundred opens and reads under `/sys/devices/system/cpu`): about 1.4 ms on a 2-core
-/// VM, a fifth of a 9-pose 3D solve's whole process, paid at the first supernodal update of any
-/// factorization. The sizes read are the same whichever thread reads them, so are the blockings
-/// and every result. On one core nothing is started: the first product pays, as before. The
-/// thread ends with the process if it is still running then.
-pub fn warm_dense_products() {
-    if !second_core() {
-        return;
-    }
-    // A thread that cannot be started only means that the first product pays.
-    let _ = std::thread::Builder::new()
-        .name("warm-gemm".into())
-        .spawn(|| {
-            let n = 17; // the smallest square product past nano-gemm's threshold
-            let a = faer::Mat::<f64>::identity(n, n);
-            let mut c = faer::Mat::<f64>::zeros(n, n);
-            faer::linalg::matmul::matmul(
-                c.as_mut(),
-                faer::Accum::Replace,
-                a.as_ref(),
-                a.as_ref(),
-                1.0,
-                faer::Par::Seq,
-            );
-            std::hint::black_box(&c);
-        });
-}
-
 /// `(a(), b())`: `b` on a second thread when [`second_core`], else after `a` on this one. A panic
 /// in `b` is resumed here.
 pub fn join<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send) -> (RA, RB) {
