@@ -7,6 +7,7 @@ use super::progress_bar::ProgressArgs;
 use crate::dual::rounding::Rounding;
 use crate::dual::solver::SdpSolver;
 use crate::error::Error;
+use crate::graph::NoiseKind;
 use crate::io::{self, Format, WriteOptions};
 use crate::robust::gnc::{DEFAULT_INLIER_THRESHOLD, GncIteration};
 use crate::robust::{Loss, RobustOptions, RobustSolution, StopReason, robust_solve};
@@ -416,7 +417,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let t0 = Instant::now();
     let (graph, mut read_report) = args.input.read_any_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
-    let mut graph = match graph {
+    let graph = match graph {
         io::AnyGraph::Planar(graph) => graph,
         io::AnyGraph::Spatial(graph) => {
             return run3(args, graph, read_report, read_s, output, progress, rec);
@@ -442,11 +443,37 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         ..Default::default()
     };
     let t1 = Instant::now();
+    let out_format = output.map(|path| {
+        args.to
+            .or_else(|| Format::from_extension(path))
+            .unwrap_or(read_report.format)
+    });
+    // The output's edge and observation lines do not depend on the estimate: in a plain solve
+    // the second core formats them once its share of the solve is done, while this thread
+    // descends ([`crate::linalg::parallel::when_idle`]; kitti_00 spent 14% of its time writing).
+    let shared = std::sync::Arc::new(graph);
+    let lines = match (out_format, args.robust) {
+        (Some(format), None)
+            if shared.noise == NoiseKind::Information && read_report.vertigo.is_none() =>
+        {
+            let graph = std::sync::Arc::clone(&shared);
+            let options = WriteOptions {
+                format,
+                dialect: format.default_dialect(),
+            };
+            Some(crate::linalg::parallel::when_idle(move || {
+                io::constant_lines(&graph, None, options)
+            }))
+        }
+        _ => None,
+    };
     // What `--robust` found, for the viewer once the estimate is known.
     let mut gnc_view = None;
+    // The graph without the rejected edges (--drop-outliers).
+    let mut dropped = None;
     let (solution, robust) = match args.robust {
         None => (
-            progress.watch(|| rec.observe(|| solve(&graph, &options)))?,
+            progress.watch(|| rec.observe(|| solve(&shared, &options)))?,
             None,
         ),
         Some(loss) => {
@@ -459,18 +486,18 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 solve: options,
                 ..Default::default()
             };
-            let r = progress.watch(|| rec.observe(|| robust_solve(&graph, &robust_options)))?;
-            let report = RobustReport::new(&r, &graph, &read_report.edge_lines, &robust_options);
+            let r = progress.watch(|| rec.observe(|| robust_solve(&shared, &robust_options)))?;
+            let report = RobustReport::new(&r, &shared, &read_report.edge_lines, &robust_options);
             if rec.is_enabled() {
                 gnc_view = Some((
-                    graph.clone(),
+                    (*shared).clone(),
                     r.rejected.clone(),
                     r.residuals.clone(),
                     r.iterations.clone(),
                 ));
             }
             if args.drop_outliers {
-                graph = crate::robust::gnc::without_edges(&graph, &r.rejected);
+                dropped = Some(crate::robust::gnc::without_edges(&shared, &r.rejected));
                 if let Some(v) = &mut read_report.vertigo {
                     let keep: Vec<bool> = r.rejected.iter().map(|x| !x).collect();
                     v.retain_edges(&keep);
@@ -480,6 +507,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
     };
     let solve_s = t1.elapsed().as_secs_f64();
+    // Taken (or waited for) before the graph is: the task holds it.
+    let lines = lines.and_then(|l| l.take());
+    let mut graph = dropped.unwrap_or_else(|| {
+        std::sync::Arc::try_unwrap(shared).unwrap_or_else(|graph| (*graph).clone())
+    });
     graph.poses.clone_from(&solution.estimate);
     graph.vertices_declared = true;
     graph
@@ -497,19 +529,21 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
 
     let t2 = Instant::now();
     // A write that fails after all (a full disk) is reported after the report, never instead.
-    let written = match output {
-        Some(path) => {
-            let format = args
-                .to
-                .or_else(|| Format::from_extension(path))
-                .unwrap_or(read_report.format);
+    let written = match (output, out_format) {
+        (Some(path), Some(format)) => {
             progress.phase(&format!(
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            write_graph(&mut graph, read_report.vertigo.as_ref(), path, format)
+            write_graph(
+                &mut graph,
+                read_report.vertigo.as_ref(),
+                path,
+                format,
+                lines.as_ref(),
+            )
         }
-        None => Ok(()),
+        _ => Ok(()),
     };
     let write_s = t2.elapsed().as_secs_f64();
     let t3 = Instant::now();
@@ -915,19 +949,27 @@ fn write_marginals(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result
     Ok(())
 }
 
-/// Writes the solved graph to `path` in `format`.
+/// Writes the solved graph to `path` in `format`, its edge and observation lines from `lines`
+/// where they were formatted ahead.
 fn write_graph(
     graph: &mut crate::graph::PoseGraph,
     vertigo: Option<&crate::vertigo::Vertigo>,
     path: &str,
     format: Format,
+    lines: Option<&io::ConstantLines>,
 ) -> crate::Result<()> {
     // The output holds information matrices, in the format's own order.
     graph
-        .convert_noise(crate::graph::NoiseKind::Information)
+        .convert_noise(NoiseKind::Information)
         .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
     let dialect = format.default_dialect();
-    io::write_path_with(graph, vertigo, WriteOptions { format, dialect }, path)?;
+    io::write_path_prepared(
+        graph,
+        vertigo,
+        WriteOptions { format, dialect },
+        path,
+        lines,
+    )?;
     Ok(())
 }
 

@@ -157,6 +157,117 @@ pub fn halves<R: Send>(
     }
 }
 
+/// A task for the second core's idle time ([`when_idle`]): started there once the work built
+/// [`ahead`] is done, or never; [`Idle::take`] hands its result over.
+pub struct Idle<T> {
+    shared: Option<std::sync::Arc<IdleShared<T>>>,
+}
+
+struct IdleShared<T> {
+    state: std::sync::Mutex<IdleState<T>>,
+    done: std::sync::Condvar,
+}
+
+enum IdleState<T> {
+    Pending(Box<dyn FnOnce() -> T + Send>),
+    Running,
+    Done(T),
+    Forgone,
+}
+
+/// The runners of the tasks given to [`when_idle`] and not started yet.
+type Runner = Box<dyn FnOnce() + Send>;
+static IDLE: std::sync::Mutex<Vec<Runner>> = std::sync::Mutex::new(Vec::new());
+
+/// Leaves `task` for the second core to run once [`ahead`]'s work there is done (the
+/// certificate's analysis built, the core idle while this thread descends), on a thread of its
+/// own that counts as busy ([`second_core_idle`] is false while it runs). For work whose result
+/// is wanted only at the end, such as the lines of the output that the solve does not change.
+/// Nothing is registered on one core; where no [`ahead`] follows, the task is never run, and
+/// [`Idle::take`] says so: the caller then computes the result itself, the same bits.
+pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -> Idle<T> {
+    if !second_core() {
+        return Idle { shared: None };
+    }
+    let shared = std::sync::Arc::new(IdleShared {
+        state: std::sync::Mutex::new(IdleState::Pending(Box::new(task))),
+        done: std::sync::Condvar::new(),
+    });
+    let runner = {
+        let shared = shared.clone();
+        Box::new(move || {
+            let task = {
+                let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+                match std::mem::replace(&mut *state, IdleState::Running) {
+                    IdleState::Pending(task) => task,
+                    other => {
+                        *state = other;
+                        return;
+                    }
+                }
+            };
+            // The task (and what it holds) is gone before its result is handed over.
+            let result = task();
+            *shared.state.lock().unwrap_or_else(|p| p.into_inner()) = IdleState::Done(result);
+            shared.done.notify_all();
+        })
+    };
+    IDLE.lock().unwrap_or_else(|p| p.into_inner()).push(runner);
+    Idle {
+        shared: Some(shared),
+    }
+}
+
+impl<T> Idle<T> {
+    /// The task's result: `None` if it was not started (it never will be then), after waiting
+    /// for it if it is running.
+    pub fn take(mut self) -> Option<T> {
+        let shared = self.shared.take()?;
+        let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+        loop {
+            match std::mem::replace(&mut *state, IdleState::Forgone) {
+                IdleState::Done(result) => return Some(result),
+                IdleState::Running => {
+                    *state = IdleState::Running;
+                    state = shared.done.wait(state).unwrap_or_else(|p| p.into_inner());
+                }
+                // Pending (dropped here) or already forgone.
+                _ => return None,
+            }
+        }
+    }
+}
+
+impl<T> Drop for Idle<T> {
+    /// A task not started is forgone (and what it holds dropped): nobody would take its result.
+    fn drop(&mut self) {
+        if let Some(shared) = self.shared.take() {
+            let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+            if matches!(*state, IdleState::Pending(_)) {
+                *state = IdleState::Forgone;
+            }
+        }
+    }
+}
+
+/// Starts the tasks left by [`when_idle`] on a thread of their own, in the order given.
+fn run_idle_tasks() {
+    let runners = std::mem::take(&mut *IDLE.lock().unwrap_or_else(|p| p.into_inner()));
+    if runners.is_empty() {
+        return;
+    }
+    let busy = Busy::new();
+    // A thread that cannot be started leaves the tasks pending: their callers compute them.
+    let _ = std::thread::Builder::new()
+        .name("idle".into())
+        .spawn(move || {
+            let _busy = busy;
+            for run in runners {
+                run();
+            }
+        });
+}
+
 /// `(main(ready, spare), then())` with `first`, then `spare_task` unless `main` has claimed it
 /// first ([`Spare`]), then `then` in that order on a second core when [`second_core`]:
 /// `ready.take()` waits for `first`'s result and hands it over ([`Ready`]); on one core neither
@@ -190,7 +301,9 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
             // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
             run_spare.run(spare_task);
-            then()
+            let c = then();
+            run_idle_tasks();
+            c
         });
         let ready = Ready {
             receive: Some(receive),
@@ -282,6 +395,66 @@ mod tests {
             },
         );
         assert!(busy);
+    }
+
+    /// A task left for the idle time runs once [`ahead`]'s work is done, on a thread of its own,
+    /// and `take` hands its result over (on one core it is never run, and `take` says so).
+    #[test]
+    fn an_idle_task_runs_after_the_work_ahead() {
+        let caller = std::thread::current().id();
+        let idle = when_idle(|| (6 * 7, std::thread::current().id()));
+        let ((), ()) = ahead(|| (), || (), || (), |_, _| ());
+        match idle.take() {
+            Some((value, thread)) => {
+                assert!(second_core());
+                assert_eq!(value, 42);
+                assert_ne!(thread, caller);
+            }
+            None => assert!(!second_core()),
+        }
+    }
+
+    /// `take`: a task not started is forgone and dropped (`None`), a running one waited for, a
+    /// finished one's result handed over; dropping the handle forgoes a task not started. (The
+    /// states set by hand: the runner's part is the test above.)
+    #[test]
+    fn an_idle_task_not_started_is_forgone_and_a_running_one_waited_for() {
+        let held = std::sync::Arc::new(());
+        let idle = |state: IdleState<u32>| Idle {
+            shared: Some(std::sync::Arc::new(IdleShared {
+                state: std::sync::Mutex::new(state),
+                done: std::sync::Condvar::new(),
+            })),
+        };
+        let pending = |held: &std::sync::Arc<()>| {
+            let held = held.clone();
+            IdleState::Pending(Box::new(move || {
+                drop(held);
+                1
+            }))
+        };
+        assert_eq!(idle(pending(&held)).take(), None);
+        assert_eq!(
+            std::sync::Arc::strong_count(&held),
+            1,
+            "the task is dropped"
+        );
+        drop(idle(pending(&held)));
+        assert_eq!(
+            std::sync::Arc::strong_count(&held),
+            1,
+            "the task is dropped"
+        );
+        assert_eq!(idle(IdleState::Done(5)).take(), Some(5));
+        let running = idle(IdleState::Running);
+        let shared = running.shared.clone().unwrap();
+        let finisher = std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            *shared.state.lock().unwrap() = IdleState::Done(9);
+            shared.done.notify_all();
+        });
+        assert_eq!(running.take(), Some(9));
+        finisher.join().unwrap();
     }
 
     /// Both halves of the range, each once, lower first, whatever the threshold and the core

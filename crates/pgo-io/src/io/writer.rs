@@ -11,7 +11,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// How to write a graph.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WriteOptions {
     pub format: Format,
     /// Order of the noise values; its kind (information or covariance) must be the graph's.
@@ -31,13 +31,90 @@ pub fn format_f64(v: f64, out: &mut Vec<u8>) {
 
 /// Writes `graph` to `out`.
 pub fn write<W: Write>(graph: &PoseGraph, options: WriteOptions, out: W) -> crate::Result<()> {
-    write_named(graph, None, options, out, "<stdout>")
+    write_named(graph, None, options, None, out, "<stdout>")
+}
+
+/// The lines of a written graph that its estimate does not change, its edges' and its landmark
+/// observations', formatted ahead of the write ([`constant_lines`], [`write_path_prepared`]):
+/// the bytes [`write`] gives them, each line formatted by itself, so a tool can have them
+/// formatted while it solves.
+pub struct ConstantLines {
+    options: WriteOptions,
+    edges: usize,
+    observations: usize,
+    edge_lines: Vec<u8>,
+    observation_lines: Vec<u8>,
+}
+
+impl ConstantLines {
+    /// Whether these lines can stand for `graph`'s in a file written with `options`: as many
+    /// edges and observations, the same format and dialect. (That they are the same graph's and
+    /// Vertigo lines' is the caller's part: [`write_path_prepared`].)
+    fn fit(&self, graph: &PoseGraph, options: WriteOptions) -> bool {
+        self.options == options
+            && self.edges == graph.edges.len()
+            && self.observations == graph.landmarks.observations.len()
+    }
+}
+
+/// The edges' and the landmark observations' lines of `graph` (with `vertigo`'s edge kinds) as
+/// [`write`] would write them with `options`.
+pub fn constant_lines(
+    graph: &PoseGraph,
+    vertigo: Option<&Vertigo>,
+    options: WriteOptions,
+) -> ConstantLines {
+    let edges = EdgeLines {
+        graph,
+        vertigo,
+        edge_tag: edge_tag(options.format),
+        toro_order: options.dialect.toro_order(),
+    };
+    let m = graph.edges.len();
+    let mut edge_lines = Vec::with_capacity(m * 160);
+    for k in 0..m {
+        edges.line(k, &mut edge_lines);
+    }
+    let marks = &graph.landmarks;
+    let mut observation_lines = Vec::with_capacity(marks.observations.len() * 96);
+    for k in 0..marks.observations.len() {
+        observation_line(graph, k, &mut observation_lines);
+    }
+    ConstantLines {
+        options,
+        edges: m,
+        observations: marks.observations.len(),
+        edge_lines,
+        observation_lines,
+    }
+}
+
+/// The edge tag of a format.
+fn edge_tag(format: Format) -> &'static str {
+    match format {
+        Format::G2o => g2o::EDGE,
+        Format::Toro => toro::EDGE,
+    }
+}
+
+/// Appends the line of landmark observation k.
+fn observation_line(graph: &PoseGraph, k: usize, buf: &mut Vec<u8>) {
+    let marks = &graph.landmarks;
+    let o = &marks.observations[k];
+    let tag = match marks.form {
+        LandmarkForm::G2o => g2o::LANDMARK_EDGE,
+        LandmarkForm::Landmark2 => g2o::LANDMARK2,
+    };
+    buf.extend_from_slice(tag.as_bytes());
+    let _ = write!(buf, " {} {}", graph.ids[o.pose], marks.ids[o.landmark]);
+    end_line(o.d.iter().chain(&o.information.0).copied(), buf);
 }
 
 fn write_named<W: Write>(
     graph: &PoseGraph,
     vertigo: Option<&Vertigo>,
     options: WriteOptions,
+    lines: Option<&ConstantLines>,
     mut out: W,
     name: &str,
 ) -> crate::Result<()> {
@@ -72,14 +149,15 @@ fn write_named<W: Write>(
             graph.landmarks.len()
         )));
     }
-    let (landmark_vertex, observation_tag) = match graph.landmarks.form {
-        LandmarkForm::G2o => (g2o::LANDMARK_VERTEX, g2o::LANDMARK_EDGE),
-        LandmarkForm::Landmark2 => (g2o::POINT2, g2o::LANDMARK2),
+    let landmark_vertex = match graph.landmarks.form {
+        LandmarkForm::G2o => g2o::LANDMARK_VERTEX,
+        LandmarkForm::Landmark2 => g2o::POINT2,
     };
-    let (vertex_tag, edge_tag) = match options.format {
-        Format::G2o => (g2o::VERTEX, g2o::EDGE),
-        Format::Toro => (toro::VERTEX, toro::EDGE),
+    let vertex_tag = match options.format {
+        Format::G2o => g2o::VERTEX,
+        Format::Toro => toro::VERTEX,
     };
+    let lines = lines.filter(|l| l.fit(graph, options));
     let io = |e| Error::io(name, e);
     // Lines are assembled in a buffer flushed in large chunks.
     let mut buf: Vec<u8> = Vec::with_capacity(1 << 16);
@@ -98,10 +176,15 @@ fn write_named<W: Write>(
     let edges = EdgeLines {
         graph,
         vertigo,
-        edge_tag,
+        edge_tag: edge_tag(options.format),
         toro_order: options.dialect.toro_order(),
     };
-    let m = graph.edges.len();
+    // Formatted ahead, the edges' lines are written as they are.
+    let m = if lines.is_some() {
+        0
+    } else {
+        graph.edges.len()
+    };
     let split =
         m >= PARALLEL_EDGES && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
     let mid = if split {
@@ -149,11 +232,16 @@ fn write_named<W: Write>(
         }
         Ok(())
     })?;
-    for o in &marks.observations {
-        buf.extend_from_slice(observation_tag.as_bytes());
-        let _ = write!(buf, " {} {}", graph.ids[o.pose], marks.ids[o.landmark]);
-        end_line(o.d.iter().chain(&o.information.0).copied(), &mut buf);
-        put(&mut buf, &mut out)?;
+    if let Some(lines) = lines {
+        out.write_all(&buf).map_err(io)?;
+        buf.clear();
+        out.write_all(&lines.edge_lines).map_err(io)?;
+        out.write_all(&lines.observation_lines).map_err(io)?;
+    } else {
+        for k in 0..marks.observations.len() {
+            observation_line(graph, k, &mut buf);
+            put(&mut buf, &mut out)?;
+        }
     }
     for p in vertigo.map_or(&[][..], |v| &v.priors) {
         let _ = write!(buf, "{} {} ", vertigo::EDGE_SWITCH_PRIOR, p.id);
@@ -368,8 +456,21 @@ pub fn write_path_with(
     options: WriteOptions,
     path: &str,
 ) -> crate::Result<()> {
+    write_path_prepared(graph, vertigo, options, path, None)
+}
+
+/// [`write_path_with`], the edges' and observations' lines taken from `lines` where given:
+/// [`constant_lines`] of the same graph (its estimate aside) and Vertigo lines. Lines made for
+/// another format or dialect, or another count of edges or observations, are not used.
+pub fn write_path_prepared(
+    graph: &PoseGraph,
+    vertigo: Option<&Vertigo>,
+    options: WriteOptions,
+    path: &str,
+    lines: Option<&ConstantLines>,
+) -> crate::Result<()> {
     write_atomic(path, |out, name| {
-        write_named(graph, vertigo, options, out, name)
+        write_named(graph, vertigo, options, lines, out, name)
     })
 }
 
@@ -607,6 +708,77 @@ fn set_default_permissions(_: &std::path::Path) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lines formatted ahead ([`constant_lines`]) give the file [`write_path_with`] writes, byte
+    /// for byte: for a pose graph with g2o's landmark types and a FIX, one with CPL-SLAM's
+    /// LANDMARK2 lines, one with Vertigo's switchable and max-mixture edges and a plain one, in
+    /// g2o and TORO (where TORO has a form for the graph; where not, the same refusal). Lines made for
+    /// another format, or for a graph with an edge less, are not used: the file is still the
+    /// one written without them.
+    #[test]
+    fn lines_formatted_ahead_write_the_same_file() {
+        let g2o_landmarks = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1.5 0.25 0.125\nVERTEX_XY 7 2 3\n\
+            EDGE_SE2 0 1 1.5 0.25 0.125 10 0.5 0 20 0.25 30\n\
+            EDGE_SE2_XY 0 7 2 3 4 0.5 5\nEDGE_SE2_XY 1 7 0.5 2.75 6 -0.5 7\nFIX 0\n";
+        let landmark2 = "EDGE_SE2 0 1 1 0 0 50 0 0 50 0 100\nEDGE_SE2 1 2 1 0 0.1 50 0 0 50 0 100\n\
+            LANDMARK2 0 0 2 1 10 0 10\nLANDMARK2 2 0 0.3 1.1 10 1 10\nLANDMARK2 1 1 -1 2 5 0 5\n";
+        let vertigo = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\n\
+            EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2 1 2 1 0 0 1 0 0 1 0 1\n\
+            VERTEX_SWITCH 5 1\nEDGE_SE2_SWITCHABLE 0 2 5 2 0 0 1 0 0 1 0 1\n\
+            EDGE_SWITCH_PRIOR 5 1 20\nEDGE_SE2_MAXMIX 2 0 0.01 -2 0 0 1 0 0 1 0 1\n";
+        let poses = "VERTEX_SE2 3 0 0 0\nVERTEX_SE2 4 1 0.5 0.25\nVERTEX_SE2 9 2 1 -3\n\
+            EDGE_SE2 3 4 1 0.5 0.25 10 0.5 0.125 20 0.25 30\nEDGE_SE2 4 9 1 0.5 3 1 0 0 2 0 3\n\
+            EDGE_SE2 9 3 -2 -1 3 7 0.75 -0.5 8 0.375 9\nFIX 3\n";
+        let dir = tempfile::tempdir().unwrap();
+        let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        for (k, text) in [g2o_landmarks, landmark2, vertigo, poses]
+            .into_iter()
+            .enumerate()
+        {
+            let (graph, report) =
+                super::super::read(text.as_bytes(), "in.g2o", &Default::default()).unwrap();
+            let vertigo = report.vertigo.as_ref();
+            assert_eq!(
+                vertigo.is_some(),
+                k == 2,
+                "Vertigo's lines are read as such"
+            );
+            assert_eq!(!graph.landmarks.observations.is_empty(), k < 2);
+            for format in [Format::G2o, Format::Toro] {
+                let options = WriteOptions {
+                    format,
+                    dialect: format.default_dialect(),
+                };
+                let other = WriteOptions {
+                    format: match format {
+                        Format::G2o => Format::Toro,
+                        Format::Toro => Format::G2o,
+                    },
+                    dialect: format.default_dialect(),
+                };
+                let mut fewer = graph.clone();
+                fewer.edges.pop();
+                let plain = write_path_with(&graph, vertigo, options, &path("plain"))
+                    .map(|()| std::fs::read(path("plain")).unwrap());
+                for lines in [
+                    constant_lines(&graph, vertigo, options),
+                    constant_lines(&graph, vertigo, other),
+                    constant_lines(&fewer, None, options),
+                ] {
+                    let ahead =
+                        write_path_prepared(&graph, vertigo, options, &path("ahead"), Some(&lines))
+                            .map(|()| std::fs::read(path("ahead")).unwrap());
+                    match (&plain, &ahead) {
+                        (Ok(a), Ok(b)) => assert!(a == b, "graph {k}, {format:?}"),
+                        (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                        _ => panic!("graph {k}, {format:?}: {plain:?} against {ahead:?}"),
+                    }
+                }
+                // TORO has a form for the plain pose graph only.
+                assert_eq!(plain.is_ok(), format == Format::G2o || k == 3);
+            }
+        }
+    }
 
     #[test]
     fn outputs_are_checked_and_errors_name_the_users_path() {
