@@ -206,9 +206,13 @@ pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -
                     }
                 }
             };
-            // The task (and what it holds) is gone before its result is handed over.
-            let result = task();
-            *shared.state.lock().unwrap_or_else(|p| p.into_inner()) = IdleState::Done(result);
+            // The task (and what it holds) is gone before its result is handed over; one that
+            // panics leaves the result to the caller (`take` answers `None`).
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(task));
+            *shared.state.lock().unwrap_or_else(|p| p.into_inner()) = match result {
+                Ok(result) => IdleState::Done(result),
+                Err(_) => IdleState::Forgone,
+            };
             shared.done.notify_all();
         })
     };
@@ -219,8 +223,8 @@ pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -
 }
 
 impl<T> Idle<T> {
-    /// The task's result: `None` if it was not started (it never will be then), after waiting
-    /// for it if it is running.
+    /// The task's result, after waiting for it if it is running; `None` if it was not started
+    /// (it never will be then) or panicked.
     pub fn take(mut self) -> Option<T> {
         let shared = self.shared.take()?;
         let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
@@ -398,10 +402,12 @@ mod tests {
     }
 
     /// A task left for the idle time runs once [`ahead`]'s work is done, on a thread of its own,
-    /// and `take` hands its result over (on one core it is never run, and `take` says so).
+    /// and `take` hands its result over (on one core it is never run, and `take` says so); one
+    /// that panics leaves `take` with `None` instead of waiting.
     #[test]
     fn an_idle_task_runs_after_the_work_ahead() {
         let caller = std::thread::current().id();
+        let panics = when_idle(|| -> u32 { panic!("an idle task that panics") });
         let idle = when_idle(|| (6 * 7, std::thread::current().id()));
         let ((), ()) = ahead(|| (), || (), || (), |_, _| ());
         match idle.take() {
@@ -412,6 +418,7 @@ mod tests {
             }
             None => assert!(!second_core()),
         }
+        assert_eq!(panics.take(), None);
     }
 
     /// `take`: a task not started is forgone and dropped (`None`), a running one waited for, a
