@@ -408,8 +408,23 @@ mod tests {
     fn an_idle_task_runs_after_the_work_ahead() {
         let caller = std::thread::current().id();
         let panics = when_idle(|| -> u32 { panic!("an idle task that panics") });
-        let idle = when_idle(|| (6 * 7, std::thread::current().id()));
-        let ((), ()) = ahead(|| (), || (), || (), |_, _| ());
+        let (started, wait) = std::sync::mpsc::channel();
+        let idle = when_idle(move || {
+            let _ = started.send(());
+            (6 * 7, std::thread::current().id())
+        });
+        // Started (not yet finished) when `take` comes: a task not started by then is left to
+        // the caller.
+        let ((), ()) = ahead(
+            || (),
+            || (),
+            || (),
+            |_, _| {
+                if second_core() {
+                    wait.recv().expect("the idle task starts");
+                }
+            },
+        );
         match idle.take() {
             Some((value, thread)) => {
                 assert!(second_core());
