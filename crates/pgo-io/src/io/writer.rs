@@ -712,9 +712,9 @@ mod tests {
     /// Lines formatted ahead ([`constant_lines`]) give the file [`write_path_with`] writes, byte
     /// for byte: for a pose graph with g2o's landmark types and a FIX, one with CPL-SLAM's
     /// LANDMARK2 lines, one with Vertigo's switchable and max-mixture edges and a plain one, in
-    /// g2o and TORO (where TORO has a form for the graph; where not, the same refusal). Lines made for
-    /// another format, or for a graph with an edge less, are not used: the file is still the
-    /// one written without them.
+    /// g2o and TORO (where TORO has a form for the graph; where not, the same refusal). Lines
+    /// made for another format, or for a graph with an edge less, are not used: the file is
+    /// still the one written without them.
     #[test]
     fn lines_formatted_ahead_write_the_same_file() {
         let g2o_landmarks = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1.5 0.25 0.125\nVERTEX_XY 7 2 3\n\
