@@ -36,7 +36,7 @@ pub fn write<W: Write>(graph: &PoseGraph, options: WriteOptions, out: W) -> crat
 
 /// The lines of a written graph that its estimate does not change, its edges' and its landmark
 /// observations', formatted ahead of the write ([`constant_lines`], [`write_path_prepared`]):
-/// the bytes [`write`] gives them, each line formatted by itself, so a tool can have them
+/// the bytes [`write()`] gives them, each line formatted by itself, so a tool can have them
 /// formatted while it solves.
 pub struct ConstantLines {
     options: WriteOptions,
@@ -58,7 +58,7 @@ impl ConstantLines {
 }
 
 /// The edges' and the landmark observations' lines of `graph` (with `vertigo`'s edge kinds) as
-/// [`write`] would write them with `options`.
+/// [`write()`] would write them with `options`.
 pub fn constant_lines(
     graph: &PoseGraph,
     vertigo: Option<&Vertigo>,
