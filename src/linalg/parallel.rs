@@ -98,11 +98,12 @@ fn beside<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send) -
 type Job = Box<dyn FnOnce() + Send + 'static>;
 
 /// The second core's thread: started at the first task given to a second core and kept for the
-/// process, so that a task starts where the core is idle. A thread started for each task was
-/// often queued behind this one instead, on its core, until this one blocked: the Newton
-/// system's thread started 1-2.9 ms late in 8 of 20 runs of M3500 (the thread of W̃'s ordering
-/// having just ended), and a descent waited for it that long; a thread woken from its wait
-/// starts in about 40 µs.
+/// process, so that a task costs a wake-up (about 40 µs here) instead of a thread's start
+/// (its stack, its thread-local state and a clone, paid by the caller): whole process 0.95-0.99
+/// on seven public files. Either way a task can start late where the kernel's own work holds the
+/// other core (its softirqs after the previous process, seen here for 2.3 ms): the Newton
+/// system's task started 2.1-2.7 ms late in 6 of 20 runs of M3500 with this thread, 1-2.9 ms in
+/// 8 of 20 with a thread per task.
 struct Worker {
     state: std::sync::Mutex<WorkerState>,
     wake: std::sync::Condvar,
