@@ -123,10 +123,12 @@ fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// The second core's thread, where there is a second core and its thread could be started.
+/// The second core's thread, where there is a second core and its thread could be started, in
+/// the process that started it: a process forked from it (Python's multiprocessing, say) has
+/// not the thread, and gives its tasks threads of their own.
 fn worker() -> Option<&'static Worker> {
-    static WORKER: OnceLock<Option<&'static Worker>> = OnceLock::new();
-    *WORKER.get_or_init(|| {
+    static WORKER: OnceLock<Option<(u32, &'static Worker)>> = OnceLock::new();
+    let (process, worker) = (*WORKER.get_or_init(|| {
         if !second_core() {
             return None;
         }
@@ -138,8 +140,9 @@ fn worker() -> Option<&'static Worker> {
             .name("second-core".into())
             .spawn(move || worker.serve())
             .ok()
-            .map(|_| worker)
-    })
+            .map(|_| (std::process::id(), worker))
+    }))?;
+    (process == std::process::id()).then_some(worker)
 }
 
 impl Worker {

@@ -166,3 +166,19 @@ def test_pgo_error_for_two_fixed_poses_in_a_component(tmp_path):
     two.write(path)
     stderr = run("pgo-solve", path, "-o", tmp_path / "out.g2o", ok=(2,)).stderr
     assert stderr == f"pgo-solve: error: {e.value}\n"
+
+
+def _solve_cost(path):
+    return pgo.solve(pgo.read(path)).cost
+
+
+def test_a_forked_process_solves_too(mit_solution):
+    """pgo keeps a thread for the second core once a solve has used it; a process forked after
+    that (multiprocessing's fork start method, Linux's default before Python 3.14) has not the
+    thread, and its solves must run all the same, to the same bits."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(1) as pool:
+        cost = pool.apply_async(_solve_cost, (str(MIT),)).get(timeout=120)
+    assert cost == mit_solution.cost == MIT_COST
