@@ -1329,7 +1329,9 @@ pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
 /// sequential one: torus3D (4.0·10⁶ values) 2.0-3.5 ms against 3.7-5.5, cubicle (3.9·10⁶)
 /// 2.3-3.4 against 4.2-5.4; below it they gained nothing or lost: cityTrees10000 (5.3·10⁵)
 /// 0.8-1.9 against 1.0-1.6 ms, parking-garage (5.0·10⁵) 0.37-0.84 against 0.35-0.42 ms (the
-/// second thread's start and the top set's sequential part outweigh half a solve).
+/// handing over and the top set's sequential part outweigh half a solve). From 2¹⁷, with the
+/// second core's thread kept (no thread started per solve), whole process split/not, 15
+/// interleaved pairs: cityTrees10000 1.02, M3500 1.00, parking-garage 0.99.
 pub const SPLIT_SOLVE_MIN_VALUES: usize = 1 << 20;
 
 /// When faer merges two adjacent supernodes of n columns in all (relaxed supernodal

@@ -353,8 +353,8 @@ type Runner = Box<dyn FnOnce() + Send>;
 static IDLE: std::sync::Mutex<Vec<Runner>> = std::sync::Mutex::new(Vec::new());
 
 /// Leaves `task` for the second core to run once [`ahead`]'s work there is done (the
-/// certificate's analysis built, the core idle while this thread descends), on a thread of its
-/// own that counts as busy ([`second_core_idle`] is false while it runs). For work whose result
+/// certificate's analysis built, the core idle while this thread descends), on the second core's
+/// thread, counted busy meanwhile ([`second_core_idle`] is false while it runs). For work whose result
 /// is wanted only at the end, such as the lines of the output that the solve does not change.
 /// Nothing is registered on one core; where no [`ahead`] follows, the task is never run, and
 /// [`Idle::take`] says so: the caller then computes the result itself, the same bits.
@@ -370,7 +370,7 @@ pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -
         let shared = shared.clone();
         Box::new(move || {
             let task = {
-                let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+                let mut state = lock(&shared.state);
                 match std::mem::replace(&mut *state, IdleState::Running) {
                     IdleState::Pending(task) => task,
                     other => {
@@ -382,7 +382,7 @@ pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -
             // The task (and what it holds) is gone before its result is handed over; one that
             // panics leaves the result to the caller (`take` answers `None`).
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(task));
-            *shared.state.lock().unwrap_or_else(|p| p.into_inner()) = match result {
+            *lock(&shared.state) = match result {
                 Ok(result) => IdleState::Done(result),
                 Err(_) => IdleState::Forgone,
             };
@@ -400,7 +400,7 @@ impl<T> Idle<T> {
     /// (it never will be then) or panicked.
     pub fn take(mut self) -> Option<T> {
         let shared = self.shared.take()?;
-        let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+        let mut state = lock(&shared.state);
         loop {
             match std::mem::replace(&mut *state, IdleState::Forgone) {
                 IdleState::Done(result) => return Some(result),
@@ -419,7 +419,7 @@ impl<T> Drop for Idle<T> {
     /// A task not started is forgone (and what it holds dropped): nobody would take its result.
     fn drop(&mut self) {
         if let Some(shared) = self.shared.take() {
-            let mut state = shared.state.lock().unwrap_or_else(|p| p.into_inner());
+            let mut state = lock(&shared.state);
             if matches!(*state, IdleState::Pending(_)) {
                 *state = IdleState::Forgone;
             }
@@ -428,7 +428,7 @@ impl<T> Drop for Idle<T> {
 }
 
 /// Lets the tasks left by [`when_idle`] start on the second core's thread once it is free.
-fn run_idle_tasks() {
+fn let_idle_tasks_start() {
     if let Some(worker) = worker() {
         worker.idle_ready();
     }
@@ -485,7 +485,7 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
             let _ = send.send(first());
             run_spare.run(spare_task);
             let c = then();
-            run_idle_tasks();
+            let_idle_tasks_start();
             c
         },
     )
@@ -571,8 +571,8 @@ mod tests {
         assert!(busy);
     }
 
-    /// A task left for the idle time runs once [`ahead`]'s work is done, on a thread of its own,
-    /// and `take` hands its result over (on one core it is never run, and `take` says so); one
+    /// A task left for the idle time runs once [`ahead`]'s work is done, on another thread than
+    /// the caller's (the second core's), and `take` hands its result over (on one core it is never run, and `take` says so); one
     /// that panics leaves `take` with `None` instead of waiting.
     #[test]
     fn an_idle_task_runs_after_the_work_ahead() {
