@@ -8,6 +8,7 @@
 //! both are read here from the numeric factor and its symbolic structure.
 
 use crate::linalg::roundoff::gamma_with;
+use crate::linalg::tree_factor::{FactorSplit, SplitRoom};
 use crate::linalg::tree_solve::TreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -107,6 +108,11 @@ pub struct SparseFactor<T> {
     /// The elimination tree split between two cores for the LLᴴ solves, where prepared
     /// ([`Self::prepare_split`]).
     split: Option<TreeSplit>,
+    /// The elimination tree split between two cores for the LLᴴ factorizations, where prepared
+    /// ([`Self::prepare_factor_split`]).
+    factor_split: Option<FactorSplit>,
+    /// Its working memory, kept from one factorization to the next.
+    split_room: SplitRoom<T>,
 }
 
 impl<T: Scalar> SparseFactor<T> {
@@ -213,6 +219,8 @@ impl<T: Scalar> SparseFactor<T> {
             state: State::None,
             spare: Vec::new(),
             split: None,
+            factor_split: None,
+            split_room: SplitRoom::default(),
         }
     }
 
@@ -358,6 +366,25 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
+        if let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
+            (self.symbolic.raw(), self.factor_split.as_ref())
+        {
+            // Both cores where the second is idle, else one after the other: the same values.
+            let two_cores = crate::linalg::parallel::second_core_idle();
+            return match split.llt(
+                symbolic,
+                &mut self.values,
+                a,
+                &mut self.split_room,
+                two_cores,
+            ) {
+                Ok(()) => {
+                    self.state = State::Llt;
+                    Ok(())
+                }
+                Err(_) => Err(NotFactorable),
+            };
+        }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_llt(
             &mut self.values,
@@ -459,6 +486,24 @@ impl<T: Scalar> SparseFactor<T> {
         if crate::linalg::parallel::second_core() {
             self.prepare_split_from(SPLIT_SOLVE_MIN_VALUES);
         }
+    }
+
+    /// Splits the elimination tree between two cores for the LLᴴ factorizations
+    /// ([`FactorSplit`]) where the factor is supernodal, in its own order (no permutation, the
+    /// lower triangle stored) and takes [`SPLIT_FACTOR_MIN_WORK`] multiply-adds at least. On one
+    /// core as well: the factor's values depend on the split, not on the thread count.
+    pub fn prepare_factor_split(&mut self) {
+        self.prepare_factor_split_from(SPLIT_FACTOR_MIN_WORK);
+    }
+
+    /// [`Self::prepare_factor_split`] from `min_work` multiply-adds.
+    fn prepare_factor_split_from(&mut self, min_work: f64) {
+        self.factor_split = match (self.symbolic.raw(), self.symbolic.perm(), self.side) {
+            (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower) => {
+                FactorSplit::new(symbolic, min_work)
+            }
+            _ => None,
+        };
     }
 
     /// [`Self::prepare_split`] from `min_values` stored values.
@@ -1324,6 +1369,16 @@ fn amd_rank(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, 
 /// 10⁵ poses, 71, forcing it cost 21%).
 pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
 
+/// The multiply-adds ([`SparseFactor::multiply_adds`]) from which a supernodal LLᴴ splits its
+/// tree between two cores ([`FactorSplit`]). The 3D Newton systems' LLᵀ at rank 3, faer's
+/// against the split on two cores (medians of 9): sphere_bignoise (5.6·10⁸) 16.6 against 8.6
+/// ms, cubicle (7.4·10⁸) 24.7 against 12.7, sphere2500 (3.9·10⁸) 9.8 against 5.7, torus3D
+/// (1.2·10⁹, its top set the heaviest) 27.7 against 18.1; on one core the split took 0.90-1.04
+/// of faer's time. parking-garage (2.2·10⁷) factored in 0.9 ms instead of 1.7, but its whole
+/// process took 1.02-1.04 of the time (its first factorization, beside the certificate's
+/// analysis on the second core, on one), and is left to faer.
+pub const SPLIT_FACTOR_MIN_WORK: f64 = 5e7;
+
 /// The stored values from which a supernodal LLᴴ's solves split its tree between two cores
 /// ([`TreeSplit`]). Measured in whole solves (Newton's, three runs each), split against faer's
 /// sequential one: torus3D (4.0·10⁶ values) 2.0-3.5 ms against 3.7-5.5, cubicle (3.9·10⁶)
@@ -1859,6 +1914,188 @@ mod tests {
         }
         check::<f64>(|rng| rng.normal());
         check::<c64>(|rng| c64::new(rng.normal(), rng.normal()));
+    }
+
+    /// A supernodal factor of a planar grid's blocked matrix with some random longer edges
+    /// (random values, diagonally dominant), in a fill-reducing order of its own and its lower
+    /// triangle stored, as the Newton systems are: the assembly and the analysis.
+    fn grid_factor<T: Scalar>(
+        draw: &dyn Fn(&mut crate::linalg::rng::Rng) -> T,
+        seed: u64,
+    ) -> GridFactor<T> {
+        let mut rng = crate::linalg::rng::Rng::new(seed);
+        let (block, mut edges) = (3, grid_edges(30, 24, 1));
+        let nodes = 30 * 24;
+        for _ in 0..6 {
+            let mut node = || (rng.next_u64() % nodes as u64) as usize;
+            let (u, v) = (node(), node());
+            if u != v {
+                edges.push((u.min(v), u.max(v)));
+            }
+        }
+        let rank = pose_rank(nodes, edges.iter().copied(), 1.0);
+        let n = block * nodes;
+        let order = group_ordering(&rank, &(0..n).map(|r| r / block).collect::<Vec<_>>());
+        let mut at = vec![0; n];
+        for (new, &old) in order.iter().enumerate() {
+            at[old] = new;
+        }
+        // Entries (row ≥ column) in the new order: each node's block, each edge's.
+        let mut pairs: Vec<(usize, usize)> = (0..nodes).map(|u| (u, u)).collect();
+        pairs.extend(edges);
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut entries = Vec::new();
+        for &(u, v) in &pairs {
+            for a in 0..block {
+                for b in 0..block {
+                    let (i, j) = (at[u * block + a], at[v * block + b]);
+                    if u != v || i >= j {
+                        entries.push((i.max(j), i.min(j)));
+                    }
+                }
+            }
+        }
+        let mut row_sums = vec![0.0; n];
+        let mut values: Vec<T> = entries
+            .iter()
+            .map(|&(i, j)| {
+                if i == j {
+                    return T::zero_impl();
+                }
+                let v = draw(&mut rng);
+                row_sums[i] += v.modulus();
+                row_sums[j] += v.modulus();
+                v
+            })
+            .collect();
+        for (v, &(i, j)) in values.iter_mut().zip(&entries) {
+            if i == j {
+                *v = T::from_f64_impl(row_sums[i] + 1.0);
+            }
+        }
+        let assembly = Assembly::<T>::new(n, &entries);
+        let f = SparseFactor::<T>::analyze_in_order(
+            assembly.matrix.symbolic(),
+            Side::Lower,
+            Layout::Supernodal,
+        );
+        GridFactor {
+            assembly,
+            entries,
+            values,
+            factor: f,
+        }
+    }
+
+    /// [`grid_factor`]'s matrix: its assembly, its entries (row ≥ column) and their values, and
+    /// the factor's analysis.
+    struct GridFactor<T> {
+        assembly: Assembly<T>,
+        entries: Vec<(usize, usize)>,
+        values: Vec<T>,
+        factor: SparseFactor<T>,
+    }
+
+    /// The LLᴴ factorization split between two cores ([`FactorSplit`]) against faer's: the same
+    /// factor to rounding, real and complex, its updates subtracted in place block by block
+    /// and through a product of their own (both ways forced); the same bits on one core as on
+    /// two; the tree split into two sides below a top set. (Checked to fail with side 1's
+    /// updates of the top set left out, and with a side's updates of the top set subtracted
+    /// twice.)
+    #[test]
+    fn the_split_factorization_is_faers_to_rounding() {
+        use crate::linalg::tree_factor::SplitRoom;
+        fn check<T: Scalar + crate::linalg::tree_factor::Entry>(
+            draw: &dyn Fn(&mut crate::linalg::rng::Rng) -> T,
+        ) {
+            for seed in [3, 4] {
+                let GridFactor {
+                    mut assembly,
+                    values,
+                    factor: mut f,
+                    ..
+                } = grid_factor(draw, seed);
+                assembly.fill(&values);
+                f.llt(assembly.matrix.as_ref())
+                    .expect("diagonally dominant");
+                let faers = f.values.clone();
+                let scale = faers.iter().map(|v| v.modulus()).fold(0.0, f64::max);
+                let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
+                    panic!("supernodal");
+                };
+                let mut bits: Option<Vec<String>> = None;
+                for min_entries in [0, usize::MAX] {
+                    let mut split = FactorSplit::new(symbolic, 0.0).expect("the tree splits");
+                    assert!(split.sides().iter().all(|s| !s.is_empty()) && split.top() > 0);
+                    split.min_entries_per_product = min_entries;
+                    for two_cores in [false, true] {
+                        let mut ours = vec![T::zero_impl(); faers.len()];
+                        let mut room = SplitRoom::default();
+                        split
+                            .llt(
+                                symbolic,
+                                &mut ours,
+                                assembly.matrix.as_ref(),
+                                &mut room,
+                                two_cores,
+                            )
+                            .expect("diagonally dominant");
+                        let worst = ours
+                            .iter()
+                            .zip(&faers)
+                            .map(|(&a, &b)| (a - b).modulus())
+                            .fold(0.0, f64::max);
+                        assert!(worst <= 1e-13 * scale, "seed {seed}: {worst:e}");
+                        let these: Vec<String> = ours.iter().map(|x| format!("{x:?}")).collect();
+                        if min_entries == 0 {
+                            match &bits {
+                                None => bits = Some(these),
+                                Some(b) => assert_eq!(b, &these, "one core against two"),
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        check::<f64>(&|rng| rng.normal());
+        check::<c64>(&|rng| c64::new(rng.normal(), rng.normal()));
+    }
+
+    /// A matrix that is not positive definite is refused by the split factorization as by
+    /// faer's, where its trouble is on a side and where it is in the top set, and the factor
+    /// (same split, same room) factors the next matrix as if nothing had failed.
+    #[test]
+    fn the_split_factorization_refuses_what_is_not_positive_definite() {
+        let GridFactor {
+            mut assembly,
+            entries,
+            values,
+            factor: mut f,
+        } = grid_factor(&|rng| rng.normal(), 5);
+        f.prepare_factor_split_from(0.0);
+        let n = f.dim();
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
+            panic!("supernodal");
+        };
+        let split = f.factor_split.as_ref().expect("the tree splits");
+        let side_row = symbolic.supernode_begin()[split.sides()[0][0] as usize];
+        let top_row = n - 1;
+        assembly.fill(&values);
+        f.llt(assembly.matrix.as_ref())
+            .expect("diagonally dominant");
+        let good = f.values.clone();
+        for row in [side_row, top_row] {
+            let mut bad = values.clone();
+            let k = entries.iter().position(|&e| e == (row, row)).unwrap();
+            bad[k] = -1.0;
+            assembly.fill(&bad);
+            assert!(f.llt(assembly.matrix.as_ref()).is_err(), "row {row}");
+            assembly.fill(&values);
+            f.llt(assembly.matrix.as_ref())
+                .expect("diagonally dominant");
+            assert!(f.values == good, "row {row}");
+        }
     }
 
     /// The edges of an a × b × c grid graph.

@@ -4,7 +4,8 @@
 //! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
 //! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
 //! side on two cores with the same bits as on one ([`parallel`]), a supernodal LLᴴ's solves split
-//! between two cores by subtrees of the elimination tree, faer's own bits ([`tree_solve`]), and
+//! between two cores by subtrees of the elimination tree, faer's own bits ([`tree_solve`]), its
+//! factorization split the same way, the same values on one core as on two ([`tree_factor`]), and
 //! the allocator's free memory given back between phases with a factor's room mapped by two
 //! threads together ([`heap`]).
 //!
@@ -17,4 +18,5 @@ pub mod parallel;
 pub mod rng;
 pub mod roundoff;
 pub mod subspace;
+pub mod tree_factor;
 pub mod tree_solve;

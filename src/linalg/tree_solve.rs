@@ -74,16 +74,27 @@ impl TreeSplit {
     /// children's subtrees are dealt instead. `None` where the factor holds fewer than
     /// `min_values` values, or the best split's estimate is above 3/4 of one core's.
     pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>, min_values: usize) -> Option<Self> {
+        let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
+        let weight = |s: usize| {
+            let cols = end[s] - begin[s];
+            ((cols + symbolic.supernode(s).pattern().len()) * cols) as f64
+        };
+        Self::by_weight(symbolic, &weight, min_values as f64)
+    }
+
+    /// As [`Self::new`], each supernode weighing `weight(s)` (the estimate counts these instead
+    /// of stored values); `None` below a total of `min_total`.
+    pub fn by_weight(
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        weight: &dyn Fn(usize) -> f64,
+        min_total: f64,
+    ) -> Option<Self> {
         let ns = symbolic.n_supernodes();
         let n = symbolic.nrows();
         let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
         let pattern = |s: usize| symbolic.supernode(s).pattern();
-        let weight = |s: usize| {
-            let cols = end[s] - begin[s];
-            ((cols + pattern(s).len()) * cols) as f64
-        };
         let total: f64 = (0..ns).map(weight).sum();
-        if total < min_values as f64 || u32::try_from(ns).is_err() {
+        if total < min_total || u32::try_from(ns).is_err() {
             return None;
         }
         // The elimination tree of the supernodes: a supernode's parent holds the first row
@@ -200,6 +211,11 @@ impl TreeSplit {
     /// The supernodes of each side.
     pub fn sides(&self) -> &[Vec<u32>; 2] {
         &self.sides
+    }
+
+    /// Supernode s's side (0 or 1), or `None` where it is in the top set.
+    pub fn side_of(&self, s: usize) -> Option<usize> {
+        (self.owner[s] != TOP).then_some(usize::from(self.owner[s]))
     }
 
     /// Whether row `r`'s supernode is in the top set.

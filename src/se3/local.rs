@@ -195,6 +195,7 @@ impl System {
             layout,
         );
         factor.prepare_split();
+        factor.prepare_factor_split();
         System {
             p,
             offset,

@@ -1,0 +1,522 @@
+//! A supernodal LLᴴ factorization, A = L Lᴴ, on two cores: the supernodes of the elimination
+//! tree split into two sides of whole subtrees ([`TreeSplit`], balanced by multiply-adds here)
+//! and a top set where the sides meet, as for the solves ([`super::tree_solve`]).
+//!
+//! Each supernode s is computed left-looking, as faer computes it: A's columns of s scattered
+//! into its dense block, the update L_d,below · L_d,midᴴ of every descendant d whose pattern has
+//! rows in s's columns subtracted, then the dense LLᴴ of the diagonal block and the triangular
+//! solve of the rows below. A side supernode's descendants are all on its side, so the two sides
+//! are computed side by side. A side's updates of the top set are computed on that side too:
+//! side 0's into the top blocks of L themselves, side 1's into a room of its own. The top set is
+//! then computed in ascending order on one core, each block adding side 1's room to side 0's
+//! updates and A's columns, then subtracting its top descendants' updates.
+//!
+//! The order of every sum is fixed by the split alone, so the factor is the same whatever the
+//! thread count: on one core (or with the second one busy) the sides are computed one after the
+//! other. It is not faer's to the last bit. faer subtracts each update through a product that
+//! gathers and scatters rows inside its kernel, which is not public; here an update is
+//! subtracted in place, one product of faer's per block of contiguous rows and columns of s
+//! (where these blocks hold [`MIN_ENTRIES_PER_PRODUCT`] entries on average), else computed as a
+//! product of its own and subtracted entry by entry. On the 3D Newton systems that is as fast as
+//! faer's on one core. faer's supernodal factorization is sequential, and its parallel mode
+//! splits the dense kernels inside a supernode, not the tree; written here for that reason.
+
+use super::tree_solve::TreeSplit;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::{
+    LltParams, LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+};
+use faer::linalg::matmul::matmul_with_conj;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::SparseColMatRef;
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+use faer::{Accum, Conj, MatMut, MatRef, Par, Spec};
+
+/// The scalars of the factorization: those of the split solve, which are added to as well.
+pub trait Entry: super::tree_solve::Entry + std::ops::AddAssign {}
+
+impl<T> Entry for T where T: super::tree_solve::Entry + std::ops::AddAssign {}
+
+/// The fewest entries per product (on average) for which an update is subtracted in place,
+/// block by block of contiguous rows and columns; below, it is one product of its own, then
+/// subtracted entry by entry.
+const MIN_ENTRIES_PER_PRODUCT: usize = 64;
+
+/// The factorization failed: a pivot was not positive (column `index`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NonPositivePivot {
+    pub index: usize,
+}
+
+/// A supernodal LLᴴ split between two cores ([`FactorSplit::new`]).
+#[derive(Debug, Clone)]
+pub struct FactorSplit {
+    split: TreeSplit,
+    /// The supernodes d < s whose patterns have rows in supernode s's columns, ascending:
+    /// `updaters[start[s]..start[s + 1]]`.
+    start: Vec<usize>,
+    updaters: Vec<u32>,
+    /// The top supernodes, ascending, and the offset of each one's block in a side's room for
+    /// its updates of the top set (`offset[k]..offset[k + 1]`).
+    top: Vec<u32>,
+    offset: Vec<usize>,
+    /// The most rows of an update and the widest supernode, for the workspaces.
+    max_below: usize,
+    max_cols: usize,
+    /// [`MIN_ENTRIES_PER_PRODUCT`] (another in tests, to force either way of subtracting).
+    pub(crate) min_entries_per_product: usize,
+}
+
+impl FactorSplit {
+    /// The split of `symbolic`'s factorization balanced by each supernode's multiply-adds (its
+    /// own block's k³/3 + k²m and its updates of its ancestors); `None` where they total less
+    /// than `min_work`, or where the tree does not split ([`TreeSplit::by_weight`]).
+    pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>, min_work: f64) -> Option<Self> {
+        let ns = symbolic.n_supernodes();
+        let end = symbolic.supernode_end();
+        let begin = symbolic.supernode_begin();
+        // Each supernode's updates: its pattern's rows grouped by the supernode holding them.
+        let mut work = vec![0.0f64; ns];
+        let mut count = vec![0usize; ns + 1];
+        let mut max_below = 0;
+        for d in 0..ns {
+            let k = end[d] - begin[d];
+            let pattern = symbolic.supernode(d).pattern();
+            let m = pattern.len();
+            work[d] = (k * k * k) as f64 / 3.0 + (k * k * m) as f64;
+            let mut i = 0;
+            while i < m {
+                let s = end.partition_point(|&e| e <= pattern[i]);
+                let mid = pattern[i..].partition_point(|&r| r < end[s]);
+                work[d] += ((m - i) * mid * k) as f64;
+                max_below = max_below.max(m - i);
+                count[s + 1] += 1;
+                i += mid;
+            }
+        }
+        let split = TreeSplit::by_weight(symbolic, &|s| work[s], min_work)?;
+        for s in 0..ns {
+            count[s + 1] += count[s];
+        }
+        let start = count;
+        let mut next = start.clone();
+        let mut updaters = vec![0u32; start[ns]];
+        for d in 0..ns {
+            let pattern = symbolic.supernode(d).pattern();
+            let mut i = 0;
+            while i < pattern.len() {
+                let s = end.partition_point(|&e| e <= pattern[i]);
+                updaters[next[s]] = d as u32;
+                next[s] += 1;
+                i += pattern[i..].partition_point(|&r| r < end[s]);
+            }
+        }
+        let top: Vec<u32> = (0..ns)
+            .filter(|&s| split.side_of(s).is_none())
+            .map(|s| s as u32)
+            .collect();
+        let mut offset = vec![0usize];
+        for &s in &top {
+            let s = s as usize;
+            let k = end[s] - begin[s];
+            let rows = k + symbolic.supernode(s).pattern().len();
+            offset.push(offset.last().unwrap() + rows * k);
+        }
+        let max_cols = (0..ns).map(|s| end[s] - begin[s]).max().unwrap_or(0);
+        Some(FactorSplit {
+            split,
+            start,
+            updaters,
+            top,
+            offset,
+            max_below,
+            max_cols,
+            min_entries_per_product: MIN_ENTRIES_PER_PRODUCT,
+        })
+    }
+
+    /// The supernodes of each side.
+    pub fn sides(&self) -> &[Vec<u32>; 2] {
+        self.split.sides()
+    }
+
+    /// The number of supernodes in the top set.
+    pub fn top(&self) -> usize {
+        self.top.len()
+    }
+
+    /// The supernodes whose patterns have rows in supernode s's columns, ascending.
+    fn updaters(&self, s: usize) -> &[u32] {
+        &self.updaters[self.start[s]..self.start[s + 1]]
+    }
+
+    /// The values of L (faer's layout for `symbolic`, so that faer's solves and
+    /// [`TreeSplit::solve_in_place`] read them) for `a_lower`, A's lower triangle in the
+    /// factor's own order. The sides run side by side where `two_cores`, else one after the
+    /// other; the values are the same either way.
+    pub fn llt<T: Entry>(
+        &self,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        values: &mut [T],
+        a_lower: SparseColMatRef<'_, usize, T>,
+        room: &mut SplitRoom<T>,
+        two_cores: bool,
+    ) -> Result<(), NonPositivePivot> {
+        assert_eq!(values.len(), symbolic.len_val());
+        assert_eq!(a_lower.nrows(), symbolic.nrows());
+        values.fill(T::zero_impl());
+        let shared = Shared(values.as_mut_ptr());
+        let side = |side: usize, work: &mut Workspace<T>, room: &mut Vec<T>| {
+            work.ready(self, symbolic.nrows());
+            for &s in self.split.sides()[side].iter() {
+                // SAFETY: s is this side's; it reads its descendants, all on this side.
+                unsafe { work.supernode(self, symbolic, &shared, a_lower, s as usize, None)? };
+            }
+            // This side's updates of the top set, each top supernode's block in turn: side 0's
+            // in the top blocks of L themselves (zero so far), side 1's in a room of its own.
+            if side == 1 {
+                room.clear();
+                room.resize(*self.offset.last().unwrap(), T::zero_impl());
+            }
+            for (k, &s) in self.top.iter().enumerate() {
+                let s = s as usize;
+                let block = if side == 0 {
+                    // SAFETY: s's block, which no other thread touches before the top set.
+                    unsafe { shared.block(symbolic, s) }
+                } else {
+                    &mut room[self.offset[k]..self.offset[k + 1]]
+                };
+                work.map_rows(symbolic, s);
+                for &d in self.updaters(s) {
+                    if self.split.side_of(d as usize) == Some(side) {
+                        // SAFETY: d is this side's, computed above.
+                        unsafe { work.update(self, symbolic, &shared, block, s, d as usize) };
+                    }
+                }
+                work.unmap_rows(symbolic, s);
+            }
+            Ok::<(), NonPositivePivot>(())
+        };
+        let SplitRoom { work, room } = room;
+        let [work0, work1] = work;
+        let (done0, done1) = if two_cores {
+            super::parallel::join(|| side(0, work0, &mut Vec::new()), || side(1, work1, room))
+        } else {
+            let done0 = side(0, work0, &mut Vec::new());
+            (done0, side(1, work1, room))
+        };
+        done0?;
+        done1?;
+        for k in 0..self.top.len() {
+            let s = self.top[k] as usize;
+            // SAFETY: one thread from here on.
+            unsafe {
+                work0.supernode(
+                    self,
+                    symbolic,
+                    &shared,
+                    a_lower,
+                    s,
+                    Some(&room[self.offset[k]..self.offset[k + 1]]),
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// L's values, written by two threads at once in disjoint supernodes: each side writes its own
+/// supernodes' blocks and reads its own descendants' only; the top set is written after both.
+struct Shared<T>(*mut T);
+
+impl<T> Shared<T> {
+    /// Supernode s's block of L.
+    ///
+    /// # Safety
+    /// Not read or written by another thread meanwhile.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn block(&self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) -> &mut [T] {
+        let (begin, end) = (
+            symbolic.col_ptr_for_val()[s],
+            symbolic.col_ptr_for_val()[s + 1],
+        );
+        // SAFETY: inside L's values (faer's layout); exclusive by the caller's contract.
+        unsafe { std::slice::from_raw_parts_mut(self.0.add(begin), end - begin) }
+    }
+}
+
+// SAFETY: see the struct's documentation: the threads touch disjoint blocks.
+unsafe impl<T: Send> Send for Shared<T> {}
+// SAFETY: as above.
+unsafe impl<T: Sync> Sync for Shared<T> {}
+
+/// One thread's working memory: the local row of each global row of the supernode being
+/// computed, an update's product, and the dense LLᴴ's scratch.
+struct Workspace<T> {
+    local: Vec<usize>,
+    rows: Vec<usize>,
+    runs: Vec<usize>,
+    product: Vec<T>,
+    /// The dense LLᴴ's scratch, for supernodes of up to `cols` columns.
+    mem: MemBuffer,
+    cols: usize,
+}
+
+/// The working memory of [`FactorSplit::llt`], kept from one factorization to the next (its
+/// pages mapped once): each side's [`Workspace`] and its updates of the top set.
+pub struct SplitRoom<T> {
+    work: [Workspace<T>; 2],
+    room: Vec<T>,
+}
+
+impl<T: Entry> Default for SplitRoom<T> {
+    fn default() -> Self {
+        SplitRoom {
+            work: [Workspace::empty(), Workspace::empty()],
+            room: Vec::new(),
+        }
+    }
+}
+
+impl<T: Entry> Workspace<T> {
+    fn empty() -> Self {
+        Workspace {
+            local: Vec::new(),
+            rows: Vec::new(),
+            runs: Vec::new(),
+            product: Vec::new(),
+            mem: MemBuffer::new(StackReq::EMPTY),
+            cols: 0,
+        }
+    }
+
+    /// Room for `split`'s factorizations of dimension n (allocated once, kept after).
+    fn ready(&mut self, split: &FactorSplit, n: usize) {
+        if self.local.len() != n {
+            self.local = vec![usize::MAX; n];
+        }
+        if self.rows.len() < split.max_below {
+            self.rows.resize(split.max_below, 0);
+        }
+        if self.cols < split.max_cols {
+            self.cols = split.max_cols;
+            self.mem = MemBuffer::new(cholesky_in_place_scratch::<T>(
+                split.max_cols,
+                Par::Seq,
+                Spec::<LltParams, T>::default(),
+            ));
+        }
+    }
+
+    /// Supernode s's rows below its columns, numbered as in its block.
+    fn map_rows(&mut self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) {
+        let k = symbolic.supernode_end()[s] - symbolic.supernode_begin()[s];
+        for (i, &row) in symbolic.supernode(s).pattern().iter().enumerate() {
+            self.local[row] = k + i;
+        }
+    }
+
+    fn unmap_rows(&mut self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) {
+        for &row in symbolic.supernode(s).pattern() {
+            self.local[row] = usize::MAX;
+        }
+    }
+
+    /// Subtracts d's update of supernode s, L_d,below · L_d,midᴴ, from `block` (s's block,
+    /// column-major, rows mapped by [`Self::map_rows`]): its lower triangle in s's diagonal
+    /// block and all of it below.
+    ///
+    /// # Safety
+    /// d's block is computed and not written by another thread meanwhile.
+    unsafe fn update(
+        &mut self,
+        split: &FactorSplit,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        shared: &Shared<T>,
+        block: &mut [T],
+        s: usize,
+        d: usize,
+    ) {
+        let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
+        let (s_start, s_end) = (begin[s], end[s]);
+        let s_rows = block.len() / (s_end - s_start);
+        let d_cols = end[d] - begin[d];
+        let d_pattern = symbolic.supernode(d).pattern();
+        let d_rows = d_cols + d_pattern.len();
+        let first = d_pattern.partition_point(|&r| r < s_start);
+        let mid = d_pattern[first..].partition_point(|&r| r < s_end);
+        let below = d_pattern.len() - first;
+        let at = symbolic.col_ptr_for_val()[d];
+        // SAFETY: d's block, read only (the caller's contract).
+        let ld = unsafe { std::slice::from_raw_parts(shared.0.add(at), d_rows * d_cols) };
+        let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
+        let ld_below = ld.subrows(d_cols + first, below);
+        let ld_mid = ld.subrows(d_cols + first, mid);
+        // The rows of the update in s's block: increasing, as d's pattern is; the first `mid`
+        // of them are s's columns as well.
+        let rows = &mut self.rows[..below];
+        for (local, &row) in rows.iter_mut().zip(&d_pattern[first..]) {
+            *local = if row < s_end {
+                row - s_start
+            } else {
+                self.local[row]
+            };
+        }
+        let s_cols = s_end - s_start;
+        let mut ls = MatMut::from_column_major_slice_mut(block, s_rows, s_cols);
+        let minus_one = -T::one_impl();
+        // Runs of contiguous rows (split where s's columns end), `runs[r]..runs[r + 1]`; the
+        // first `column_runs` of them are runs of s's columns too.
+        let runs = &mut self.runs;
+        runs.clear();
+        runs.push(0);
+        for i in 1..below {
+            if i == mid || rows[i] != rows[i - 1] + 1 {
+                runs.push(i);
+            }
+        }
+        runs.push(below);
+        let column_runs = runs.partition_point(|&i| i < mid);
+        // The products of the update in place: one per pair of a column run and a row run at
+        // or below it (its lower triangle where the two are the same run).
+        let products: usize = (0..column_runs).map(|c| runs.len() - 1 - c).sum();
+        if below * mid >= split.min_entries_per_product.saturating_mul(products) {
+            for c in 0..column_runs {
+                let (c0, c1) = (runs[c], runs[c + 1]);
+                let rhs = ld_below.subrows(c0, c1 - c0).transpose();
+                triangular::matmul_with_conj(
+                    ls.rb_mut()
+                        .submatrix_mut(rows[c0], rows[c0], c1 - c0, c1 - c0),
+                    BlockStructure::TriangularLower,
+                    Accum::Add,
+                    ld_below.subrows(c0, c1 - c0),
+                    BlockStructure::Rectangular,
+                    Conj::No,
+                    rhs,
+                    BlockStructure::Rectangular,
+                    Conj::Yes,
+                    minus_one,
+                    Par::Seq,
+                );
+                for r in c + 1..runs.len() - 1 {
+                    let (r0, r1) = (runs[r], runs[r + 1]);
+                    matmul_with_conj(
+                        ls.rb_mut()
+                            .submatrix_mut(rows[r0], rows[c0], r1 - r0, c1 - c0),
+                        Accum::Add,
+                        ld_below.subrows(r0, r1 - r0),
+                        Conj::No,
+                        rhs,
+                        Conj::Yes,
+                        minus_one,
+                        Par::Seq,
+                    );
+                }
+            }
+            return;
+        }
+        if self.product.len() < below * mid {
+            self.product.resize(below * mid, T::zero_impl());
+        }
+        let mut u =
+            MatMut::from_column_major_slice_mut(&mut self.product[..below * mid], below, mid);
+        matmul_with_conj(
+            u.rb_mut(),
+            Accum::Replace,
+            ld_below,
+            Conj::No,
+            ld_mid.transpose(),
+            Conj::Yes,
+            T::one_impl(),
+            Par::Seq,
+        );
+        let product = &self.product[..below * mid];
+        for j in 0..mid {
+            let col = rows[j];
+            let target = &mut block[col * s_rows..(col + 1) * s_rows];
+            let (rows, column) = (&rows[j..], &product[j * below + j..(j + 1) * below]);
+            for (&r, &v) in rows.iter().zip(column) {
+                target[r] -= v;
+            }
+        }
+    }
+
+    /// Computes supernode s: A's columns, the updates of its descendants, its dense LLᴴ and the
+    /// solve of the rows below. For a top supernode, `side_1` is side 1's room for it: the
+    /// block holds side 0's updates already, the room side 1's, and only the updates of top
+    /// descendants are computed here.
+    ///
+    /// # Safety
+    /// s's block is written by no other thread, and the descendants whose updates are computed
+    /// here are computed and not written meanwhile.
+    unsafe fn supernode(
+        &mut self,
+        split: &FactorSplit,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        shared: &Shared<T>,
+        a_lower: SparseColMatRef<'_, usize, T>,
+        s: usize,
+        side_1: Option<&[T]>,
+    ) -> Result<(), NonPositivePivot> {
+        let (s_start, s_end) = (symbolic.supernode_begin()[s], symbolic.supernode_end()[s]);
+        let k = s_end - s_start;
+        let rows = k + symbolic.supernode(s).pattern().len();
+        // SAFETY: s's block, this thread's alone (the caller's contract).
+        let block = unsafe { shared.block(symbolic, s) };
+        self.map_rows(symbolic, s);
+        for j in s_start..s_end {
+            let column = &mut block[(j - s_start) * rows..(j - s_start + 1) * rows];
+            for (i, &v) in a_lower.row_idx_of_col(j).zip(a_lower.val_of_col(j)) {
+                if i < j {
+                    continue;
+                }
+                let local = if i < s_end {
+                    i - s_start
+                } else {
+                    self.local[i]
+                };
+                column[local] += v;
+            }
+        }
+        if let Some(sum) = side_1 {
+            // Side 1's updates, subtracted from zero in its room (side 0's are in the block).
+            for (b, &u) in block.iter_mut().zip(sum) {
+                *b += u;
+            }
+        }
+        for &d in split.updaters(s) {
+            let d = d as usize;
+            if side_1.is_some() && split.split.side_of(d).is_some() {
+                continue;
+            }
+            // SAFETY: d is a descendant of s, computed (the caller's contract).
+            unsafe { self.update(split, symbolic, shared, block, s, d) };
+        }
+        self.unmap_rows(symbolic, s);
+        let mut ls = MatMut::from_column_major_slice_mut(block, rows, k);
+        let (mut top, mut bottom) = ls.rb_mut().split_at_row_mut(k);
+        let stack = MemStack::new(&mut self.mem);
+        cholesky_in_place(
+            top.rb_mut(),
+            LltRegularization::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        )
+        .map_err(|e| match e {
+            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                NonPositivePivot {
+                    index: index + s_start,
+                }
+            }
+        })?;
+        solve_lower_triangular_in_place(
+            top.rb().conjugate(),
+            bottom.rb_mut().transpose_mut(),
+            Par::Seq,
+        );
+        Ok(())
+    }
+}
