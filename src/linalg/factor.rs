@@ -490,14 +490,10 @@ impl<T: Scalar> SparseFactor<T> {
 
     /// Splits the elimination tree between two cores for the LLᴴ factorizations
     /// ([`FactorSplit`]) where the factor is supernodal, in its own order (no permutation, the
-    /// lower triangle stored) and takes [`SPLIT_FACTOR_MIN_WORK`] multiply-adds at least. On one
-    /// core as well: the factor's values depend on the split, not on the thread count.
-    pub fn prepare_factor_split(&mut self) {
-        self.prepare_factor_split_from(SPLIT_FACTOR_MIN_WORK);
-    }
-
-    /// [`Self::prepare_factor_split`] from `min_work` multiply-adds.
-    fn prepare_factor_split_from(&mut self, min_work: f64) {
+    /// lower triangle stored) and takes `min_work` multiply-adds ([`Self::multiply_adds`]) at
+    /// least. On one core as well: the factor's values depend on the split, not on the thread
+    /// count.
+    pub fn prepare_factor_split(&mut self, min_work: f64) {
         self.factor_split = match (self.symbolic.raw(), self.symbolic.perm(), self.side) {
             (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower) => {
                 FactorSplit::new(symbolic, min_work)
@@ -1369,16 +1365,6 @@ fn amd_rank(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<(Vec<usize>, 
 /// 10⁵ poses, 71, forcing it cost 21%).
 pub const DISSECTION_WORTH: f64 = 100.0 * SPATIAL_BLOCK_WORK;
 
-/// The multiply-adds ([`SparseFactor::multiply_adds`]) from which a supernodal LLᴴ splits its
-/// tree between two cores ([`FactorSplit`]). The 3D Newton systems' LLᵀ at rank 3, faer's
-/// against the split on two cores (medians of 9): sphere_bignoise (5.6·10⁸) 16.6 against 8.6
-/// ms, cubicle (7.4·10⁸) 24.7 against 12.7, sphere2500 (3.9·10⁸) 9.8 against 5.7, torus3D
-/// (1.2·10⁹, its top set the heaviest) 27.7 against 18.1; on one core the split took 0.90-1.04
-/// of faer's time. parking-garage (2.2·10⁷) factored in 0.9 ms instead of 1.7, but its whole
-/// process took 1.02-1.04 of the time (its first factorization, beside the certificate's
-/// analysis on the second core, on one), and is left to faer.
-pub const SPLIT_FACTOR_MIN_WORK: f64 = 5e7;
-
 /// The stored values from which a supernodal LLᴴ's solves split its tree between two cores
 /// ([`TreeSplit`]). Measured in whole solves (Newton's, three runs each), split against faer's
 /// sequential one: torus3D (4.0·10⁶ values) 2.0-3.5 ms against 3.7-5.5, cubicle (3.9·10⁶)
@@ -2073,7 +2059,7 @@ mod tests {
             values,
             factor: mut f,
         } = grid_factor(&|rng| rng.normal(), 5);
-        f.prepare_factor_split_from(0.0);
+        f.prepare_factor_split(0.0);
         let n = f.dim();
         let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
             panic!("supernodal");

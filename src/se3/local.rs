@@ -195,7 +195,7 @@ impl System {
             layout,
         );
         factor.prepare_split();
-        factor.prepare_factor_split();
+        factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
         System {
             p,
             offset,
@@ -563,6 +563,16 @@ fn retract(
 /// sphere2500 (2 500 poses) 0.95, cubicle 0.97, torus3D 0.98, sphere_bignoise (2 200) 0.98;
 /// parking-garage (1 661) 1.00.
 const SPLIT_POSES: usize = 2048;
+
+/// The multiply-adds from which the Newton systems' LLᵀ is split between two cores
+/// ([`crate::linalg::tree_factor`]). Alone, faer's against the split on two cores (medians of
+/// 9, rank 3): sphere_bignoise (5.6·10⁸) 16.6 against 8.6 ms, cubicle (7.4·10⁸) 24.7 against
+/// 12.7, sphere2500 (3.9·10⁸) 9.8 against 5.7, torus3D (1.2·10⁹, its top set the heaviest)
+/// 27.7 against 18.1; on one core the split took 0.90-1.04 of faer's time. Whole process,
+/// split/not, 15 interleaved pairs: sphere_bignoise 0.86, cubicle 0.95, torus3D 0.96,
+/// sphere2500 0.98. parking-garage (2.2·10⁷) factored in 1.0 ms instead of 1.9 ms, but its whole
+/// process took 1.02-1.04 of the time in three runs of 11 to 21 pairs, and is left to faer.
+const SPLIT_FACTOR_MIN_WORK: f64 = 5e7;
 
 /// The chord steps of [`optimize`]: after a step that gained at most `CHORD_AFTER`·f, the next
 /// one first solves with the last factorization, of the point just left (its Hessian differs

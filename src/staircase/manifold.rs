@@ -320,6 +320,14 @@ fn sphere_basis(y: &[c64], out: &mut Vec<c64>) {
     }
 }
 
+/// The multiply-adds from which the Newton systems' LLᵀ is split between two cores where their
+/// factor is supernodal ([`crate::linalg::tree_factor`]). Whole process, split/not, 21
+/// interleaved pairs: M3500 (7.5·10⁶) 0.85, M3500c 0.86, city10000 (9.3·10⁷) 0.89,
+/// cityTrees10000 (1.1·10⁷) 0.94, manhattan (7.5·10⁶) 0.95; below it ais2klinik (4.0·10⁶) 1.01
+/// (victoriaPark, unchanged, 0.98-1.03 in the same runs). Each LLᵀ of cityTrees10000 in 1.3-1.4
+/// ms instead of 2.4.
+const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
+
 /// The Newton system's sparse matrix for a fixed rank and pattern.
 pub struct NewtonSystem {
     /// H + μD in the factor's elimination order, lower triangle.
@@ -355,6 +363,7 @@ impl NewtonSystem {
             Side::Lower => (assembly.transposed(), factor.given(Side::Lower)),
         };
         factor.prepare_split();
+        factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
         NewtonSystem {
             assembly,
             factor,
