@@ -1,8 +1,10 @@
 //! Same input and flags, the same bytes on one core or two: `pgo-solve` pinned to one CPU
 //! (`taskset -c 0`, so that it finds no second core and runs every task on one thread) and free
 //! to use two writes the same JSON report and the same estimate, for a pose graph, a landmark
-//! graph, a 3D graph and a robust (GNC) run. `pgo::linalg::parallel` promises this: only whole,
-//! independent tasks run side by side.
+//! graph, a 3D graph, graphs whose Newton factorizations are split between the cores and a
+//! robust (GNC) run. `pgo::linalg::parallel` promises this: only whole, independent tasks run
+//! side by side, and where a factorization is split (`pgo::linalg::tree_factor`) the order of
+//! its sums depends on the split, not on the threads.
 
 mod common;
 
@@ -61,6 +63,16 @@ fn a_3d_graph_is_solved_to_the_same_bytes() {
     // 6275 edges: its estimate's edge lines are formatted on two threads when two are free.
     let file = common::datasets_dir().join("parking-garage.g2o");
     same_bytes(&[file.to_str().unwrap()]);
+}
+
+/// M3500's planar Newton systems and sphere2500's 3D ones are factored by the split LLᵀ, on
+/// both cores where the second is free and one after the other where it is not.
+#[test]
+fn graphs_whose_factorizations_are_split_are_solved_to_the_same_bytes() {
+    for name in ["M3500.g2o", "sphere2500.g2o"] {
+        let file = common::datasets_dir().join(name);
+        same_bytes(&[file.to_str().unwrap()]);
+    }
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //! (the second core's, kept for the process), each computed exactly as it would be
 //! alone, so that no result depends on the thread count.
 //! Only whole tasks run in parallel (an analysis beside a descent, an ordering beside an
-//! assembly); no sum is ever split between threads.
+//! assembly, the two sides of a split factorization); no sum is split by the thread count: where
+//! a task computes a partial sum ([`super::tree_factor`]), it is the same partial sum on one
+//! core, computed there one task after the other.
 
 use std::sync::OnceLock;
 
