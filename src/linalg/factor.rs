@@ -502,6 +502,11 @@ impl<T: Scalar> SparseFactor<T> {
         };
     }
 
+    /// Whether the LLᴴ factorizations are split between the cores ([`Self::prepare_factor_split`]).
+    pub fn splits_factorizations(&self) -> bool {
+        self.factor_split.is_some()
+    }
+
     /// [`Self::prepare_split`] from `min_values` stored values.
     fn prepare_split_from(&mut self, min_values: usize) {
         self.split = match self.symbolic.raw() {

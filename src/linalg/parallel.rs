@@ -354,12 +354,13 @@ enum IdleState<T> {
 type Runner = Box<dyn FnOnce() + Send>;
 static IDLE: std::sync::Mutex<Vec<Runner>> = std::sync::Mutex::new(Vec::new());
 
-/// Leaves `task` for the second core to run once [`ahead`]'s work there is done (the
-/// certificate's analysis built, the core idle while this thread descends), on the second core's
-/// thread, counted busy meanwhile ([`second_core_idle`] is false while it runs). For work whose result
-/// is wanted only at the end, such as the lines of the output that the solve does not change.
-/// Nothing is registered on one core; where no [`ahead`] follows, the task is never run, and
-/// [`Idle::take`] says so: the caller then computes the result itself, the same bits.
+/// Leaves `task` for the second core to run once a solver lets it start
+/// ([`let_idle_tasks_start`]: its work built [`ahead`] done, the core idle while this thread
+/// descends or certifies), on the second core's thread, counted busy meanwhile
+/// ([`second_core_idle`] is false while it runs). For work whose result is wanted only at the
+/// end, such as the lines of the output that the solve does not change. Nothing is registered
+/// on one core; where no solver lets it start, the task is never run, and [`Idle::take`] says
+/// so: the caller then computes the result itself, the same bits.
 pub fn when_idle<T: Send + 'static>(task: impl FnOnce() -> T + Send + 'static) -> Idle<T> {
     if !second_core() {
         return Idle { shared: None };
@@ -429,8 +430,11 @@ impl<T> Drop for Idle<T> {
     }
 }
 
-/// Lets the tasks left by [`when_idle`] start on the second core's thread once it is free.
-fn let_idle_tasks_start() {
+/// Lets the tasks left by [`when_idle`] start on the second core's thread once it is free: for
+/// a solver to call where that core would otherwise idle (its work built [`ahead`] done, and no
+/// factorization to come that splits itself between the cores). Tasks left after this call wait
+/// for the next one.
+pub fn let_idle_tasks_start() {
     if let Some(worker) = worker() {
         worker.idle_ready();
     }
@@ -486,9 +490,7 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
             // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
             run_spare.run(spare_task);
-            let c = then();
-            let_idle_tasks_start();
-            c
+            then()
         },
     )
 }
@@ -573,7 +575,7 @@ mod tests {
         assert!(busy);
     }
 
-    /// A task left for the idle time runs once [`ahead`]'s work is done, on another thread than
+    /// A task left for the idle time runs once [`ahead`]'s work is done and lets it start, on another thread than
     /// the caller's (the second core's), and `take` hands its result over (on one core it is never run, and `take` says so); one
     /// that panics leaves `take` with `None` instead of waiting.
     #[test]
@@ -590,7 +592,7 @@ mod tests {
         let ((), ()) = ahead(
             || (),
             || (),
-            || (),
+            let_idle_tasks_start,
             |_, _| {
                 if second_core() {
                     wait.recv().expect("the idle task starts");

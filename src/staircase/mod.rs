@@ -797,21 +797,36 @@ fn solve_from_start(
     // second core maps the pages of the first Newton factorization's values ([`Room`]), which
     // this thread joins where it comes to them first (below [`RELEASE_FROM_ROWS`] Newton rows:
     // at 10⁶ poses they would be held beside the start's own peak).
+    //
+    // The tasks left for the second core's idle time (the output's constant lines,
+    // [`crate::linalg::parallel::when_idle`]) start after the certificate's analysis where the
+    // Newton factorizations are not split between the cores, else once the descent is done: the
+    // second core is then the factorizations' (M3500: its first two factorizations found it
+    // formatting lines).
     let room = Room::new();
+    let descent_splits = std::sync::atomic::AtomicBool::new(false);
     let ((mut positions, local, mut rank_one), certifier) = crate::linalg::parallel::ahead(
         || {
             let system = NewtonSystem::new(problem, 1);
             if system.factor.dim() < RELEASE_FROM_ROWS {
                 room.prepare(system.factor.values_len());
             }
+            descent_splits.store(
+                system.factor.splits_factorizations(),
+                std::sync::atomic::Ordering::Relaxed,
+            );
             system
         },
         || OptimalPositions::new(problem),
         || {
             room.map();
-            options
+            let certifier = options
                 .certify
-                .then(|| SparseCertifier::new(&problem.matrix.upper, &problem.row_order()))
+                .then(|| SparseCertifier::new(&problem.matrix.upper, &problem.row_order()));
+            if !descent_splits.load(std::sync::atomic::Ordering::Relaxed) {
+                crate::linalg::parallel::let_idle_tasks_start();
+            }
+            certifier
         },
         |system, positions| {
             let start = start();
@@ -838,6 +853,7 @@ fn solve_from_start(
             (positions, local, rank_one)
         },
     );
+    crate::linalg::parallel::let_idle_tasks_start();
     let mut local = local?;
     let mut iterations = local.iterations;
     let Some(mut certifier) = certifier else {
