@@ -1794,30 +1794,7 @@ mod tests {
                     }
                 }
             }
-            let mut row_sums = vec![0.0; n];
-            let values: Vec<T> = entries
-                .iter()
-                .map(|&(i, j)| {
-                    if i == j {
-                        return T::zero_impl();
-                    }
-                    let v = draw(&mut rng);
-                    row_sums[i] += v.modulus();
-                    row_sums[j] += v.modulus();
-                    v
-                })
-                .collect();
-            let values: Vec<T> = entries
-                .iter()
-                .zip(values)
-                .map(|(&(i, j), v)| {
-                    if i == j {
-                        T::from_f64_impl(row_sums[i] + 1.0)
-                    } else {
-                        v
-                    }
-                })
-                .collect();
+            let values = dominant_values(n, &entries, &mut rng, &draw);
             let rank = pose_rank(nodes, edges.iter().copied(), 1.0);
             let order = group_ordering(&rank, &(0..n).map(|r| r / block).collect::<Vec<_>>());
             // The same matrix in that order, for a factor without a permutation of its own.
@@ -1907,6 +1884,36 @@ mod tests {
         check::<c64>(|rng| c64::new(rng.normal(), rng.normal()));
     }
 
+    /// Values for the entries of an n × n matrix (one triangle, each off the diagonal once):
+    /// random off the diagonal (`draw`), and on it 1 more than the row's sum of moduli, so that
+    /// the matrix is diagonally dominant, Hermitian positive definite.
+    fn dominant_values<T: Scalar>(
+        n: usize,
+        entries: &[(usize, usize)],
+        rng: &mut crate::linalg::rng::Rng,
+        draw: &dyn Fn(&mut crate::linalg::rng::Rng) -> T,
+    ) -> Vec<T> {
+        let mut row_sums = vec![0.0; n];
+        let mut values: Vec<T> = entries
+            .iter()
+            .map(|&(i, j)| {
+                if i == j {
+                    return T::zero_impl();
+                }
+                let v = draw(rng);
+                row_sums[i] += v.modulus();
+                row_sums[j] += v.modulus();
+                v
+            })
+            .collect();
+        for (v, &(i, j)) in values.iter_mut().zip(entries) {
+            if i == j {
+                *v = T::from_f64_impl(row_sums[i] + 1.0);
+            }
+        }
+        values
+    }
+
     /// A supernodal factor of a planar grid's blocked matrix with some random longer edges
     /// (random values, diagonally dominant), in a fill-reducing order of its own and its lower
     /// triangle stored, as the Newton systems are: the assembly and the analysis.
@@ -1947,24 +1954,7 @@ mod tests {
                 }
             }
         }
-        let mut row_sums = vec![0.0; n];
-        let mut values: Vec<T> = entries
-            .iter()
-            .map(|&(i, j)| {
-                if i == j {
-                    return T::zero_impl();
-                }
-                let v = draw(&mut rng);
-                row_sums[i] += v.modulus();
-                row_sums[j] += v.modulus();
-                v
-            })
-            .collect();
-        for (v, &(i, j)) in values.iter_mut().zip(&entries) {
-            if i == j {
-                *v = T::from_f64_impl(row_sums[i] + 1.0);
-            }
-        }
+        let values = dominant_values(n, &entries, &mut rng, draw);
         let assembly = Assembly::<T>::new(n, &entries);
         let f = SparseFactor::<T>::analyze_in_order(
             assembly.matrix.symbolic(),
