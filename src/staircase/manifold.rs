@@ -331,9 +331,9 @@ const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
 /// The most rows of a Newton system whose LLᵀ is split between two cores: the split's working
 /// memory (a map of the rows per side, 8 bytes a row, side 1's room for its updates of the top
 /// set, the lists of updates) stays beside the factor's peak. At 10⁶ poses (3·10⁶ rows, 46 MB
-/// of it) the split took the whole process from 11.1 s to 9.3-9.8 s but its peak from 2014-2022
-/// MiB to 2024-2065 MiB, over the 2 GiB this size is asked to fit in; 10⁵ poses (3·10⁵ rows) and
-/// the public files are split.
+/// of it) the split took the whole process from 11.7 s to 9.8-10.0 s but its peak from 2015-2022
+/// MiB to 2057-2088 MiB (three runs each, interleaved), over the 2 GiB this size is asked to fit
+/// in; 10⁵ poses (3·10⁵ rows) and the public files are split.
 const SPLIT_FACTOR_MAX_ROWS: usize = 1 << 21;
 
 /// The Newton system's sparse matrix for a fixed rank and pattern.
