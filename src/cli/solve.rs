@@ -449,8 +449,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
             .unwrap_or(read_report.format)
     });
     // The output's edge and observation lines do not depend on the estimate: in a plain solve
-    // the second core formats them once its share of the solve is done, while this thread
-    // descends ([`crate::linalg::parallel::when_idle`]; kitti_00 spent 14% of its time writing).
+    // the second core formats them once the solver lets it (its share of the work built ahead
+    // done, and the descent too where the Newton factorizations take both cores), while this
+    // thread descends or certifies ([`crate::linalg::parallel::when_idle`]; kitti_00 spent 14%
+    // of its time writing).
     let shared = std::sync::Arc::new(graph);
     let lines = match (out_format, args.robust) {
         (Some(format), None)

@@ -116,7 +116,7 @@ struct WorkerState {
     job: Option<Job>,
     /// Claimed for a job ([`Worker::claim`]) or running the idle tasks.
     busy: bool,
-    /// [`ahead`]'s work is done: the tasks left by [`when_idle`] may start.
+    /// A solver has let the tasks left by [`when_idle`] start ([`let_idle_tasks_start`]).
     idle_ready: bool,
 }
 
@@ -332,8 +332,8 @@ pub fn halves<R: Send>(
     }
 }
 
-/// A task for the second core's idle time ([`when_idle`]): started there once the work built
-/// [`ahead`] is done, or never; [`Idle::take`] hands its result over.
+/// A task for the second core's idle time ([`when_idle`]): started there once a solver lets it
+/// ([`let_idle_tasks_start`]), or never; [`Idle::take`] hands its result over.
 pub struct Idle<T> {
     shared: Option<std::sync::Arc<IdleShared<T>>>,
 }
@@ -575,9 +575,10 @@ mod tests {
         assert!(busy);
     }
 
-    /// A task left for the idle time runs once [`ahead`]'s work is done and lets it start, on another thread than
-    /// the caller's (the second core's), and `take` hands its result over (on one core it is never run, and `take` says so); one
-    /// that panics leaves `take` with `None` instead of waiting.
+    /// A task left for the idle time runs once [`ahead`]'s work is done and lets it start, on
+    /// another thread than the caller's (the second core's), and `take` hands its result over
+    /// (on one core it is never run, and `take` says so); one that panics leaves `take` with
+    /// `None` instead of waiting.
     #[test]
     fn an_idle_task_runs_after_the_work_ahead() {
         let caller = std::thread::current().id();

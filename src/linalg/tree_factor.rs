@@ -83,17 +83,12 @@ impl FactorSplit {
         let mut max_below = 0;
         for d in 0..ns {
             let k = end[d] - begin[d];
-            let pattern = symbolic.supernode(d).pattern();
-            let m = pattern.len();
+            let m = symbolic.supernode(d).pattern().len();
             work[d] = (k * k * k) as f64 / 3.0 + (k * k * m) as f64;
-            let mut i = 0;
-            while i < m {
-                let s = end.partition_point(|&e| e <= pattern[i]);
-                let mid = pattern[i..].partition_point(|&r| r < end[s]);
-                work[d] += ((m - i) * mid * k) as f64;
-                max_below = max_below.max(m - i);
+            for (s, below, mid) in updated(symbolic, d) {
+                work[d] += (below * mid * k) as f64;
+                max_below = max_below.max(below);
                 count[s + 1] += 1;
-                i += mid;
             }
         }
         let split = TreeSplit::by_weight(symbolic, &|s| work[s], min_work)?;
@@ -104,13 +99,9 @@ impl FactorSplit {
         let mut next = start.clone();
         let mut updaters = vec![0u32; start[ns]];
         for d in 0..ns {
-            let pattern = symbolic.supernode(d).pattern();
-            let mut i = 0;
-            while i < pattern.len() {
-                let s = end.partition_point(|&e| e <= pattern[i]);
+            for (s, _, _) in updated(symbolic, d) {
                 updaters[next[s]] = d as u32;
                 next[s] += 1;
-                i += pattern[i..].partition_point(|&r| r < end[s]);
             }
         }
         let top: Vec<u32> = (0..ns)
@@ -225,6 +216,25 @@ impl FactorSplit {
         }
         Ok(())
     }
+}
+
+/// The supernodes that supernode d updates, ascending, each as (s, below, mid): its pattern's
+/// rows from s's first column on (`below`), of which `mid` are s's columns.
+fn updated(
+    symbolic: &SymbolicSupernodalCholesky<usize>,
+    d: usize,
+) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+    let end = symbolic.supernode_end();
+    let pattern = symbolic.supernode(d).pattern();
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        let &row = pattern.get(i)?;
+        let s = end.partition_point(|&e| e <= row);
+        let mid = pattern[i..].partition_point(|&r| r < end[s]);
+        let below = pattern.len() - i;
+        i += mid;
+        Some((s, below, mid))
+    })
 }
 
 /// L's values, written by two threads at once in disjoint supernodes: each side writes its own
