@@ -728,24 +728,23 @@ impl PoseGraph {
                         }
                         continue;
                     }
+                    // Composed only where the edge reaches a pose first (each edge is met from both
+                    // ends, and most of them lead back into the tree).
                     let e = &self.edges[k];
-                    let z = e.measurement.to_isometry();
-                    let (v, xv) = if e.i == u {
-                        (e.j, xu * z)
-                    } else {
-                        (e.i, xu * z.inverse())
-                    };
+                    let v = if e.i == u { e.j } else { e.i };
                     if pose[v].is_none() {
-                        pose[v] = Some(xv);
+                        let z = e.measurement.to_isometry();
+                        pose[v] = Some(if e.i == u { xu * z } else { xu * z.inverse() });
                         queue.push_back(v);
                     }
                 }
             }
         }
-        self.poses = pose
-            .iter()
-            .map(|p| Pose2::from_isometry(&p.expect("every pose is reached from its root")))
-            .collect();
+        // In place: the poses' own memory, no fresh pages.
+        self.poses.resize(n, Pose2::IDENTITY);
+        for (at, p) in self.poses.iter_mut().zip(&pose) {
+            *at = Pose2::from_isometry(&p.expect("every pose is reached from its root"));
+        }
         if !self.landmarks.declared {
             for (at, p) in self.landmarks.positions.iter_mut().zip(point) {
                 if let Some(p) = p {
