@@ -772,14 +772,14 @@ impl<'o> Reader<'o> {
     }
 }
 
-/// The distinct ids of `refs`, ascending: marked in a table where they are dense enough (as
-/// [`IdIndex`] decides), else sorted. Edges-only files number their poses 0..n (a sort of their
+/// The distinct ids of `refs`, ascending: marked in a table where they are dense enough
+/// ([`dense_ids`], as for [`IdIndex`]), else sorted. Edges-only files number their poses 0..n (a sort of their
 /// 2m references took a third of the read's final phase on kitti_02 and cityTrees10000).
 fn used_ids(refs: impl Iterator<Item = VertexId> + Clone) -> Vec<VertexId> {
     let (count, max) = refs
         .clone()
         .fold((0usize, 0usize), |(c, m), id| (c + 1, m.max(id as usize)));
-    if max <= 4 * count + 1024 {
+    if dense_ids(max, count) {
         let mut seen = vec![false; max + 1];
         for id in refs {
             seen[id as usize] = true;
@@ -821,7 +821,13 @@ fn plural(n: usize, what: &str) -> String {
     }
 }
 
-/// File id -> dense index: a table when ids are dense enough, else a hash map.
+/// Whether `count` ids up to `max` are dense enough for a table indexed by id (at most four
+/// entries per id, plus a small table's worth).
+fn dense_ids(max: usize, count: usize) -> bool {
+    max <= 4 * count + 1024
+}
+
+/// File id -> dense index: a table when ids are dense enough ([`dense_ids`]), else a hash map.
 enum IdIndex {
     Table(Vec<u32>),
     Map(HashMap<VertexId, usize>),
@@ -830,7 +836,7 @@ enum IdIndex {
 impl IdIndex {
     fn new(ids: &[VertexId]) -> Self {
         let max = ids.last().map_or(0, |&m| m as usize);
-        if max <= 4 * ids.len() + 1024 {
+        if dense_ids(max, ids.len()) {
             let mut t = vec![u32::MAX; max + 1];
             for (k, &id) in ids.iter().enumerate() {
                 t[id as usize] = k as u32;
