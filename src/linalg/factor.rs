@@ -108,8 +108,8 @@ pub struct SparseFactor<T> {
     /// The elimination tree split between two cores for the LLᴴ solves, where prepared
     /// ([`Self::prepare_split`]).
     split: Option<TreeSplit>,
-    /// The elimination tree split between two cores for the LLᴴ factorizations, where prepared
-    /// ([`Self::prepare_factor_split`]).
+    /// The elimination tree split between two cores for the LLᴴ and LDLᴴ factorizations, where
+    /// prepared ([`Self::prepare_factor_split`]).
     factor_split: Option<FactorSplit>,
     /// Its working memory, kept from one factorization to the next.
     split_room: SplitRoom<T>,
@@ -413,6 +413,25 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
+        if let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
+            (self.symbolic.raw(), self.factor_split.as_ref())
+        {
+            // As for LLᴴ: both cores where the second is idle, else one after the other.
+            let two_cores = crate::linalg::parallel::second_core_idle();
+            return match split.ldlt(
+                symbolic,
+                &mut self.values,
+                a,
+                &mut self.split_room,
+                two_cores,
+            ) {
+                Ok(()) => {
+                    self.state = State::Ldlt;
+                    Ok(())
+                }
+                Err(_) => Err(NotFactorable),
+            };
+        }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_ldlt(
             &mut self.values,
@@ -488,7 +507,7 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
-    /// Splits the elimination tree between two cores for the LLᴴ factorizations
+    /// Splits the elimination tree between two cores for the LLᴴ and LDLᴴ factorizations
     /// ([`FactorSplit`]) where the factor is supernodal, in its own order (no permutation, the
     /// lower triangle stored) and takes `min_work` multiply-adds ([`Self::multiply_adds`]) at
     /// least. On one core as well: the factor's values depend on the split, not on the thread
@@ -502,7 +521,7 @@ impl<T: Scalar> SparseFactor<T> {
         };
     }
 
-    /// Whether the LLᴴ factorizations are split between the cores ([`Self::prepare_factor_split`]).
+    /// Whether the factorizations are split between the cores ([`Self::prepare_factor_split`]).
     pub fn splits_factorizations(&self) -> bool {
         self.factor_split.is_some()
     }
@@ -1986,20 +2005,49 @@ mod tests {
     /// twice.)
     #[test]
     fn the_split_factorization_is_faers_to_rounding() {
+        split_against_faers::<f64>(&|rng| rng.normal(), false);
+        split_against_faers::<c64>(&|rng| c64::new(rng.normal(), rng.normal()), false);
+    }
+
+    /// As [`the_split_factorization_is_faers_to_rounding`], the LDLᴴ without pivoting against
+    /// faer's, on the grid's matrix made indefinite: a tenth of its diagonal negated (every
+    /// principal submatrix stays diagonally dominant, so no pivot is zero), as the certificate's
+    /// shifted W̃(λ) is. (Checked to fail with the pivots left out of the updates.)
+    #[test]
+    fn the_split_ldlt_is_faers_to_rounding() {
+        split_against_faers::<f64>(&|rng| rng.normal(), true);
+        split_against_faers::<c64>(&|rng| c64::new(rng.normal(), rng.normal()), true);
+    }
+
+    /// The split factorization (LDLᴴ of the indefinite matrix where `ldlt`, else LLᴴ) against
+    /// faer's, both ways of subtracting the updates, on one core and on two.
+    fn split_against_faers<T: Scalar + crate::linalg::tree_factor::Entry>(
+        draw: &dyn Fn(&mut crate::linalg::rng::Rng) -> T,
+        ldlt: bool,
+    ) {
         use crate::linalg::tree_factor::SplitRoom;
-        fn check<T: Scalar + crate::linalg::tree_factor::Entry>(
-            draw: &dyn Fn(&mut crate::linalg::rng::Rng) -> T,
-        ) {
+        {
             for seed in [3, 4] {
                 let GridFactor {
                     mut assembly,
-                    values,
+                    entries,
+                    mut values,
                     factor: mut f,
-                    ..
                 } = grid_factor(draw, seed);
+                if ldlt {
+                    for (v, &(i, j)) in values.iter_mut().zip(&entries) {
+                        if i == j && i % 10 == 3 {
+                            *v = -*v;
+                        }
+                    }
+                }
                 assembly.fill(&values);
-                f.llt(assembly.matrix.as_ref())
-                    .expect("diagonally dominant");
+                if ldlt {
+                    f.ldlt(assembly.matrix.as_ref()).expect("no zero pivot");
+                } else {
+                    f.llt(assembly.matrix.as_ref())
+                        .expect("diagonally dominant");
+                }
                 let faers = f.values.clone();
                 let scale = faers.iter().map(|v| v.modulus()).fold(0.0, f64::max);
                 let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
@@ -2013,15 +2061,20 @@ mod tests {
                     for two_cores in [false, true] {
                         let mut ours = vec![T::zero_impl(); faers.len()];
                         let mut room = SplitRoom::default();
-                        split
-                            .llt(
-                                symbolic,
-                                &mut ours,
-                                assembly.matrix.as_ref(),
-                                &mut room,
-                                two_cores,
-                            )
-                            .expect("diagonally dominant");
+                        let factor = if ldlt {
+                            FactorSplit::ldlt::<T>
+                        } else {
+                            FactorSplit::llt::<T>
+                        };
+                        factor(
+                            &split,
+                            symbolic,
+                            &mut ours,
+                            assembly.matrix.as_ref(),
+                            &mut room,
+                            two_cores,
+                        )
+                        .expect("no failed pivot");
                         let worst = ours
                             .iter()
                             .zip(&faers)
@@ -2039,8 +2092,6 @@ mod tests {
                 }
             }
         }
-        check::<f64>(&|rng| rng.normal());
-        check::<c64>(&|rng| c64::new(rng.normal(), rng.normal()));
     }
 
     /// A matrix that is not positive definite is refused by the split factorization as by

@@ -1,11 +1,14 @@
-//! A supernodal LLᴴ factorization, A = L Lᴴ, on two cores: the supernodes of the elimination
-//! tree split into two sides of whole subtrees ([`TreeSplit`], balanced by multiply-adds here)
-//! and a top set where the sides meet, as for the solves ([`super::tree_solve`]).
+//! A supernodal LLᴴ factorization, A = L Lᴴ, or LDLᴴ without pivoting, A = L D Lᴴ with L unit
+//! lower triangular, on two cores: the supernodes of the elimination tree split into two sides
+//! of whole subtrees ([`TreeSplit`], balanced by multiply-adds here) and a top set where the
+//! sides meet, as for the solves ([`super::tree_solve`]).
 //!
 //! Each supernode s is computed left-looking, as faer computes it: A's columns of s scattered
-//! into its dense block, the update L_d,below · L_d,midᴴ of every descendant d whose pattern has
-//! rows in s's columns subtracted, then the dense LLᴴ of the diagonal block and the triangular
-//! solve of the rows below. A side supernode's descendants are all on its side, so the two sides
+//! into its dense block, the update L_d,below · L_d,midᴴ (L_d,below · D_d · L_d,midᴴ for LDLᴴ)
+//! of every descendant d whose pattern has rows in s's columns subtracted, then the dense LLᴴ
+//! (LDLᴴ) of the diagonal block and the triangular solve of the rows below (for LDLᴴ with the
+//! unit diagonal, then each column divided by its pivot). The factor is stored as faer stores
+//! it: for LDLᴴ, D on the diagonal of each supernode's block and L below it. A side supernode's descendants are all on its side, so the two sides
 //! are computed side by side. A side's updates of the top set are computed on that side too:
 //! side 0's into the top blocks of L themselves, side 1's into a room of its own. The top set is
 //! then computed in ascending order on one core, each block adding side 1's room to side 0's
@@ -18,20 +21,34 @@
 //! subtracted in place, one product of faer's per block of contiguous rows and columns of s
 //! (where these blocks hold [`MIN_ENTRIES_PER_PRODUCT`] entries on average), else computed as a
 //! product of its own and subtracted entry by entry. On the 3D Newton systems that is as fast as
-//! faer's on one core. faer's supernodal factorization is sequential, and its parallel mode
-//! splits the dense kernels inside a supernode, not the tree; written here for that reason.
+//! faer's on one core; on the planar certificate's complex LDLᴴ (city10000) faster than faer's
+//! supernodal LDLᴴ, on one core as on two. faer's supernodal factorization is sequential, and its
+//! parallel mode splits the dense kernels inside a supernode, not the tree; written here for
+//! that reason.
+//!
+//! The LDLᴴ's a-posteriori backward error bound
+//! ([`super::factor::SparseFactor::ldlt_backward_error`]) holds for these factors as for faer's:
+//! each entry of L D Lᴴ is summed here in an order of its own, and each term L_il·d_l·L̄_jl is a
+//! product rounded twice, as faer rounds it; the bound allows any order.
 
 use super::tree_solve::TreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::ldlt::factor::{
+    LdltError, LdltParams, LdltRegularization, cholesky_in_place as ldlt_in_place,
+    cholesky_in_place_scratch as ldlt_in_place_scratch,
+};
 use faer::linalg::cholesky::llt::factor::{
-    LltParams, LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+    LltError, LltParams, LltRegularization, cholesky_in_place, cholesky_in_place_scratch,
 };
 use faer::linalg::matmul::matmul_with_conj;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place,
+};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+use faer::traits::math_utils::{mul_real, real, recip};
 use faer::{Accum, Conj, MatMut, MatRef, Par, Spec};
 
 /// The scalars of the factorization: those of the split solve, which are added to as well.
@@ -44,10 +61,17 @@ impl<T> Entry for T where T: super::tree_solve::Entry + std::ops::AddAssign {}
 /// subtracted entry by entry.
 const MIN_ENTRIES_PER_PRODUCT: usize = 64;
 
-/// The factorization failed: a pivot was not positive (column `index`).
+/// The factorization failed at the pivot of column `index`: not positive (LLᴴ), or zero (LDLᴴ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct NonPositivePivot {
+pub struct FailedPivot {
     pub index: usize,
+}
+
+/// Which factorization: LLᴴ, or LDLᴴ without pivoting.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Llt,
+    Ldlt,
 }
 
 /// A supernodal LLᴴ split between two cores ([`FactorSplit::new`]).
@@ -154,7 +178,32 @@ impl FactorSplit {
         a_lower: SparseColMatRef<'_, usize, T>,
         room: &mut SplitRoom<T>,
         two_cores: bool,
-    ) -> Result<(), NonPositivePivot> {
+    ) -> Result<(), FailedPivot> {
+        self.factor(Kind::Llt, symbolic, values, a_lower, room, two_cores)
+    }
+
+    /// As [`Self::llt`], the LDLᴴ of `a_lower` without pivoting (faer's layout: each pivot on
+    /// its supernode's diagonal, L's entries below it); `Err` on a zero pivot.
+    pub fn ldlt<T: Entry>(
+        &self,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        values: &mut [T],
+        a_lower: SparseColMatRef<'_, usize, T>,
+        room: &mut SplitRoom<T>,
+        two_cores: bool,
+    ) -> Result<(), FailedPivot> {
+        self.factor(Kind::Ldlt, symbolic, values, a_lower, room, two_cores)
+    }
+
+    fn factor<T: Entry>(
+        &self,
+        kind: Kind,
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        values: &mut [T],
+        a_lower: SparseColMatRef<'_, usize, T>,
+        room: &mut SplitRoom<T>,
+        two_cores: bool,
+    ) -> Result<(), FailedPivot> {
         assert_eq!(values.len(), symbolic.len_val());
         assert_eq!(a_lower.nrows(), symbolic.nrows());
         values.fill(T::zero_impl());
@@ -163,7 +212,9 @@ impl FactorSplit {
             work.ready(self, symbolic.nrows());
             for &s in self.split.sides()[side].iter() {
                 // SAFETY: s is this side's; it reads its descendants, all on this side.
-                unsafe { work.supernode(self, symbolic, &shared, a_lower, s as usize, None)? };
+                unsafe {
+                    work.supernode(kind, self, symbolic, &shared, a_lower, s as usize, None)?
+                };
             }
             // This side's updates of the top set, each top supernode's block in turn: side 0's
             // in the top blocks of L themselves (zero so far), side 1's in a room of its own.
@@ -183,12 +234,12 @@ impl FactorSplit {
                 for &d in self.updaters(s) {
                     if self.split.side_of(d as usize) == Some(side) {
                         // SAFETY: d is this side's, computed above.
-                        unsafe { work.update(self, symbolic, &shared, block, s, d as usize) };
+                        unsafe { work.update(kind, self, symbolic, &shared, block, s, d as usize) };
                     }
                 }
                 work.unmap_rows(symbolic, s);
             }
-            Ok::<(), NonPositivePivot>(())
+            Ok::<(), FailedPivot>(())
         };
         let SplitRoom { work, room } = room;
         let [work0, work1] = work;
@@ -205,6 +256,7 @@ impl FactorSplit {
             // SAFETY: one thread from here on.
             unsafe {
                 work0.supernode(
+                    kind,
                     self,
                     symbolic,
                     &shared,
@@ -269,12 +321,14 @@ struct Workspace<T> {
     rows: Vec<usize>,
     runs: Vec<usize>,
     product: Vec<T>,
-    /// The dense LLᴴ's scratch, for supernodes of up to `cols` columns.
+    /// An LDLᴴ update's left factor L_d,below · D_d.
+    scaled: Vec<T>,
+    /// The dense LLᴴ's and LDLᴴ's scratch, for supernodes of up to `cols` columns.
     mem: MemBuffer,
     cols: usize,
 }
 
-/// The working memory of [`FactorSplit::llt`], kept from one factorization to the next (its
+/// The working memory of [`FactorSplit::llt`] and [`FactorSplit::ldlt`], kept from one factorization to the next (its
 /// pages mapped once): each side's [`Workspace`] and its updates of the top set.
 pub struct SplitRoom<T> {
     work: [Workspace<T>; 2],
@@ -297,6 +351,7 @@ impl<T: Entry> Workspace<T> {
             rows: Vec::new(),
             runs: Vec::new(),
             product: Vec::new(),
+            scaled: Vec::new(),
             mem: MemBuffer::new(StackReq::EMPTY),
             cols: 0,
         }
@@ -312,11 +367,18 @@ impl<T: Entry> Workspace<T> {
         }
         if self.cols < split.max_cols {
             self.cols = split.max_cols;
-            self.mem = MemBuffer::new(cholesky_in_place_scratch::<T>(
-                split.max_cols,
-                Par::Seq,
-                Spec::<LltParams, T>::default(),
-            ));
+            self.mem = MemBuffer::new(
+                cholesky_in_place_scratch::<T>(
+                    split.max_cols,
+                    Par::Seq,
+                    Spec::<LltParams, T>::default(),
+                )
+                .or(ldlt_in_place_scratch::<T>(
+                    split.max_cols,
+                    Par::Seq,
+                    Spec::<LdltParams, T>::default(),
+                )),
+            );
         }
     }
 
@@ -334,14 +396,16 @@ impl<T: Entry> Workspace<T> {
         }
     }
 
-    /// Subtracts d's update of supernode s, L_d,below · L_d,midᴴ, from `block` (s's block,
-    /// column-major, rows mapped by [`Self::map_rows`]): its lower triangle in s's diagonal
-    /// block and all of it below.
+    /// Subtracts d's update of supernode s, L_d,below · L_d,midᴴ (L_d,below · D_d · L_d,midᴴ for
+    /// LDLᴴ), from `block` (s's block, column-major, rows mapped by [`Self::map_rows`]): its
+    /// lower triangle in s's diagonal block and all of it below.
     ///
     /// # Safety
     /// d's block is computed and not written by another thread meanwhile.
+    #[allow(clippy::too_many_arguments)]
     unsafe fn update(
         &mut self,
+        kind: Kind,
         split: &FactorSplit,
         symbolic: &SymbolicSupernodalCholesky<usize>,
         shared: &Shared<T>,
@@ -364,6 +428,20 @@ impl<T: Entry> Workspace<T> {
         let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
         let ld_below = ld.subrows(d_cols + first, below);
         let ld_mid = ld.subrows(d_cols + first, mid);
+        // The update's left factor: L_d,below, or L_d,below · D_d for LDLᴴ (the pivots on the
+        // diagonal of d's block), as faer's supernodal LDLᴴ scales it.
+        if kind == Kind::Ldlt {
+            self.scaled.clear();
+            for c in 0..d_cols {
+                let pivot = real(&ld[(c, c)]);
+                self.scaled
+                    .extend(ld_below.col(c).iter().map(|v| mul_real(v, &pivot)));
+            }
+        }
+        let left = match kind {
+            Kind::Llt => ld_below,
+            Kind::Ldlt => MatRef::from_column_major_slice(&self.scaled, below, d_cols),
+        };
         // The rows of the update in s's block: increasing, as d's pattern is; the first `mid`
         // of them are s's columns as well.
         let rows = &mut self.rows[..below];
@@ -401,7 +479,7 @@ impl<T: Entry> Workspace<T> {
                         .submatrix_mut(rows[c0], rows[c0], c1 - c0, c1 - c0),
                     BlockStructure::TriangularLower,
                     Accum::Add,
-                    ld_below.subrows(c0, c1 - c0),
+                    left.subrows(c0, c1 - c0),
                     BlockStructure::Rectangular,
                     Conj::No,
                     rhs,
@@ -416,7 +494,7 @@ impl<T: Entry> Workspace<T> {
                         ls.rb_mut()
                             .submatrix_mut(rows[r0], rows[c0], r1 - r0, c1 - c0),
                         Accum::Add,
-                        ld_below.subrows(r0, r1 - r0),
+                        left.subrows(r0, r1 - r0),
                         Conj::No,
                         rhs,
                         Conj::Yes,
@@ -435,7 +513,7 @@ impl<T: Entry> Workspace<T> {
         matmul_with_conj(
             u.rb_mut(),
             Accum::Replace,
-            ld_below,
+            left,
             Conj::No,
             ld_mid.transpose(),
             Conj::Yes,
@@ -453,23 +531,25 @@ impl<T: Entry> Workspace<T> {
         }
     }
 
-    /// Computes supernode s: A's columns, the updates of its descendants, its dense LLᴴ and the
-    /// solve of the rows below. For a top supernode, `side_1` is side 1's room for it: the
+    /// Computes supernode s: A's columns, the updates of its descendants, its dense LLᴴ (LDLᴴ)
+    /// and the solve of the rows below. For a top supernode, `side_1` is side 1's room for it: the
     /// block holds side 0's updates already, the room side 1's, and only the updates of top
     /// descendants are computed here.
     ///
     /// # Safety
     /// s's block is written by no other thread, and the descendants whose updates are computed
     /// here are computed and not written meanwhile.
+    #[allow(clippy::too_many_arguments)]
     unsafe fn supernode(
         &mut self,
+        kind: Kind,
         split: &FactorSplit,
         symbolic: &SymbolicSupernodalCholesky<usize>,
         shared: &Shared<T>,
         a_lower: SparseColMatRef<'_, usize, T>,
         s: usize,
         side_1: Option<&[T]>,
-    ) -> Result<(), NonPositivePivot> {
+    ) -> Result<(), FailedPivot> {
         let (s_start, s_end) = (symbolic.supernode_begin()[s], symbolic.supernode_end()[s]);
         let k = s_end - s_start;
         let rows = k + symbolic.supernode(s).pattern().len();
@@ -502,31 +582,61 @@ impl<T: Entry> Workspace<T> {
                 continue;
             }
             // SAFETY: d is a descendant of s, computed (the caller's contract).
-            unsafe { self.update(split, symbolic, shared, block, s, d) };
+            unsafe { self.update(kind, split, symbolic, shared, block, s, d) };
         }
         self.unmap_rows(symbolic, s);
         let mut ls = MatMut::from_column_major_slice_mut(block, rows, k);
         let (mut top, mut bottom) = ls.rb_mut().split_at_row_mut(k);
         let stack = MemStack::new(&mut self.mem);
-        cholesky_in_place(
-            top.rb_mut(),
-            LltRegularization::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        )
-        .map_err(|e| match e {
-            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
-                NonPositivePivot {
-                    index: index + s_start,
+        let failed = |index: usize| FailedPivot {
+            index: index + s_start,
+        };
+        match kind {
+            Kind::Llt => {
+                cholesky_in_place(
+                    top.rb_mut(),
+                    LltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .map_err(|LltError::NonPositivePivot { index }| failed(index))?;
+                solve_lower_triangular_in_place(
+                    top.rb().conjugate(),
+                    bottom.rb_mut().transpose_mut(),
+                    Par::Seq,
+                );
+            }
+            Kind::Ldlt => {
+                // As faer's supernodal LDLᴴ: the dense LDLᴴ in place (D on the diagonal, L
+                // below it, the upper triangle cleared), the rows below solved with the unit
+                // triangle, then each column scaled by its pivot's reciprocal.
+                ldlt_in_place(
+                    top.rb_mut(),
+                    LdltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .map_err(|LdltError::ZeroPivot { index }| failed(index))?;
+                for j in 1..k {
+                    for i in 0..j {
+                        top[(i, j)] = T::zero_impl();
+                    }
+                }
+                solve_unit_lower_triangular_in_place(
+                    top.rb().conjugate(),
+                    bottom.rb_mut().transpose_mut(),
+                    Par::Seq,
+                );
+                for j in 0..k {
+                    let inverse = recip(&real(&top[(j, j)]));
+                    for v in bottom.rb_mut().col_mut(j).iter_mut() {
+                        *v = mul_real(v, &inverse);
+                    }
                 }
             }
-        })?;
-        solve_lower_triangular_in_place(
-            top.rb().conjugate(),
-            bottom.rb_mut().transpose_mut(),
-            Par::Seq,
-        );
+        }
         Ok(())
     }
 }
