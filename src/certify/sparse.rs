@@ -138,7 +138,7 @@ impl SparseCertifier {
         order: &[usize],
         keep_permuted: bool,
     ) -> Self {
-        let (factor, permuted, row_counts) = if keep_permuted {
+        let (mut factor, permuted, row_counts) = if keep_permuted {
             let (factor, permuted) = Permuted::analyzed(upper, order, None, Layout::AutoComplex);
             // The counts by row of the permuted matrix, back to W̃'s rows.
             let mut counts = vec![0; order.len()];
@@ -152,6 +152,7 @@ impl SparseCertifier {
             let counts = factor.row_counts();
             (factor, None, counts)
         };
+        factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
         SparseCertifier {
             values: Vec::new(),
             row_counts,
@@ -710,6 +711,17 @@ fn shifted(r: usize, c: usize, v: c64, rot0: usize, lambda: &[f64], threshold: f
         v
     }
 }
+
+/// The multiply-adds of the certificate's factorizations (complex ones) from which a supernodal
+/// factor's are split between the two cores ([`SparseFactor::prepare_factor_split`]; only a
+/// factor in its own order, with W̃'s pattern kept permuted below [`PERMUTED_BELOW_ROWS`], can
+/// be: so not at 10⁶ poses, whose memory is at its limit). Among the public planar files only
+/// city10000 and w10000 have a supernodal certificate (2.8·10⁷ each). Their LDLᴴ took 3.9 ms
+/// split against 6.2 ms by faer's on city10000 (whether or not the second core was free: faer's
+/// supernodal LDLᴴ is the slower one here); whole process, 31 interleaved pairs, city10000 0.985,
+/// the 10⁵-pose world 0.983 (11 pairs, the same peak memory). Bounds and outputs as before to
+/// the last bit on both files (at 10⁵ poses η differs in its 15th digit).
+const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
 
 /// The rows from which [`SparseCertifier`] leaves the permutation to faer: below, it keeps W̃'s
 /// pattern in the factor's order ([`Permuted`]; 16 bytes a stored entry, some 2 MB on the public
