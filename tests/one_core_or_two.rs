@@ -66,8 +66,8 @@ fn a_3d_graph_is_solved_to_the_same_bytes() {
 }
 
 /// M3500's planar Newton systems and sphere2500's 3D ones are factored by the split LLᵀ, and
-/// city10000's certificate by the split LDLᴴ, on both cores where the second is free and one
-/// after the other where it is not.
+/// city10000's and sphere2500's certificates by the split LDLᴴ, on both cores where the second
+/// is free and one after the other where it is not.
 #[test]
 fn graphs_whose_factorizations_are_split_are_solved_to_the_same_bytes() {
     for name in ["M3500.g2o", "sphere2500.g2o", "city10000.g2o"] {
