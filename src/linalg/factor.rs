@@ -679,8 +679,11 @@ impl<T: Scalar> SparseFactor<T> {
     /// *Accuracy and Stability of Numerical Algorithms*, Thm. 9.3, LU without pivoting with
     /// U = DLᴴ). Entry (i, j) sums k_ij ≤ k_i terms L_il d_l L̄_jl, k_i the entries of row i of
     /// L: in complex arithmetic the sum is within √2·γ_{k_i} of Σ|terms| in modulus (any order,
-    /// so faer's blocked supernodes too), each product within √2γ₂ + u (Lemma 3.5), the division
-    /// by d_j within u, so c_ij ≤ 1.5·k_i + 6 and γ_{2k_i+8} covers it. As ‖ΔA‖₂ ≤ ‖|ΔA|‖_∞ for
+    /// so faer's blocked supernodes too, and the split ones of [`FactorSplit`], which sum a top
+    /// supernode's updates from each side apart), each product within √2γ₂ + u (Lemma 3.5), the
+    /// division by d_j within u (2u as a product with its rounded reciprocal, as faer's
+    /// supernodal kernel and the split compute it: √2·k_i + 3.9 + 2 is still below
+    /// 1.5·k_i + 6), so c_ij ≤ 1.5·k_i + 6 and γ_{2k_i+8} covers it. As ‖ΔA‖₂ ≤ ‖|ΔA|‖_∞ for
     /// Hermitian ΔA, the bound is max_i γ_{2k_i+8}·(|L|(|D|(|Lᴴ|·1)))_i, the row sums enlarged for
     /// their own rounding: O(nnz(L)), no second factorization.
     pub fn ldlt_backward_error(&self) -> f64 {
