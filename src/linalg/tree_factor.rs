@@ -8,11 +8,12 @@
 //! of every descendant d whose pattern has rows in s's columns subtracted, then the dense LLᴴ
 //! (LDLᴴ) of the diagonal block and the triangular solve of the rows below (for LDLᴴ with the
 //! unit diagonal, then each column divided by its pivot). The factor is stored as faer stores
-//! it: for LDLᴴ, D on the diagonal of each supernode's block and L below it. A side supernode's descendants are all on its side, so the two sides
-//! are computed side by side. A side's updates of the top set are computed on that side too:
-//! side 0's into the top blocks of L themselves, side 1's into a room of its own. The top set is
-//! then computed in ascending order on one core, each block adding side 1's room to side 0's
-//! updates and A's columns, then subtracting its top descendants' updates.
+//! it: for LDLᴴ, D on the diagonal of each supernode's block and L below it. A side supernode's
+//! descendants are all on its side, so the two sides are computed side by side. A side's updates
+//! of the top set are computed on that side too: side 0's into the top blocks of L themselves,
+//! side 1's into a room of its own. The top set is then computed in ascending order on one core,
+//! each block adding side 1's room to side 0's updates and A's columns, then subtracting its top
+//! descendants' updates.
 //!
 //! The order of every sum is fixed by the split alone, so the factor is the same whatever the
 //! thread count: on one core (or with the second one busy) the sides are computed one after the
@@ -74,7 +75,7 @@ enum Kind {
     Ldlt,
 }
 
-/// A supernodal LLᴴ split between two cores ([`FactorSplit::new`]).
+/// A supernodal LLᴴ or LDLᴴ split between two cores ([`FactorSplit::new`]).
 #[derive(Debug, Clone)]
 pub struct FactorSplit {
     split: TreeSplit,
@@ -328,8 +329,9 @@ struct Workspace<T> {
     cols: usize,
 }
 
-/// The working memory of [`FactorSplit::llt`] and [`FactorSplit::ldlt`], kept from one factorization to the next (its
-/// pages mapped once): each side's [`Workspace`] and its updates of the top set.
+/// The working memory of [`FactorSplit::llt`] and [`FactorSplit::ldlt`], kept from one
+/// factorization to the next (its pages mapped once): each side's [`Workspace`] and its updates
+/// of the top set.
 pub struct SplitRoom<T> {
     work: [Workspace<T>; 2],
     room: Vec<T>,

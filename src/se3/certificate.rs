@@ -52,10 +52,10 @@ pub struct Bound3 {
 
 /// The multiply-adds of S's factorizations from which they are split between the two cores
 /// ([`SparseFactor::prepare_factor_split`]): the LDLᵀ of the inertia ladder, and the LLᵀ. All
-/// public 3D files but the two grids are above it, parking-garage (7.8·10⁶) the smallest. Whole process, split/not, 21 interleaved pairs: parking-garage
-/// 0.981, sphere2500 0.985, torus3D 0.983, cubicle 0.981, sphere_bignoise 0.976; the same
-/// reports and estimates to the last bit. (The LLᵀ alone split, before the LDLᵀ could be,
-/// measured 0.99-1.00.)
+/// public 3D files but the two grids are above it, parking-garage (7.8·10⁶) the smallest. Whole
+/// process, split/not, 21 interleaved pairs: parking-garage 0.981, sphere2500 0.985, torus3D
+/// 0.983, cubicle 0.981, sphere_bignoise 0.976; the same reports and estimates to the last bit.
+/// (The LLᵀ alone split, before the LDLᵀ could be, measured 0.99-1.00.)
 const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
 
 /// The pattern of S analyzed once, reused by every factorization.

@@ -773,8 +773,9 @@ impl<'o> Reader<'o> {
 }
 
 /// The distinct ids of `refs`, ascending: marked in a table where they are dense enough
-/// ([`dense_ids`], as for [`IdIndex`]), else sorted. Edges-only files number their poses 0..n (a sort of their
-/// 2m references took a third of the read's final phase on kitti_02 and cityTrees10000).
+/// ([`dense_ids`], as for [`IdIndex`]), else sorted. Edges-only files number their poses 0..n
+/// (a sort of their 2m references took a third of the read's final phase on kitti_02 and
+/// cityTrees10000).
 fn used_ids(refs: impl Iterator<Item = VertexId> + Clone) -> Vec<VertexId> {
     let (count, max) = refs
         .clone()
