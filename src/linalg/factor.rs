@@ -15,7 +15,7 @@ use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky,
@@ -78,6 +78,16 @@ impl Layout {
         }
     }
 }
+
+/// [`FactorSplit::llt`] or [`FactorSplit::ldlt`].
+type SplitFactorization<T> = fn(
+    &FactorSplit,
+    &SymbolicSupernodalCholesky<usize>,
+    &mut [T],
+    SparseColMatRef<'_, usize, T>,
+    &mut SplitRoom<T>,
+    bool,
+) -> Result<(), crate::linalg::tree_factor::FailedPivot>;
 
 /// The last factorization attempted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -366,24 +376,8 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
-        if let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
-            (self.symbolic.raw(), self.factor_split.as_ref())
-        {
-            // Both cores where the second is idle, else one after the other: the same values.
-            let two_cores = crate::linalg::parallel::second_core_idle();
-            return match split.llt(
-                symbolic,
-                &mut self.values,
-                a,
-                &mut self.split_room,
-                two_cores,
-            ) {
-                Ok(()) => {
-                    self.state = State::Llt;
-                    Ok(())
-                }
-                Err(_) => Err(NotFactorable),
-            };
+        if let Some(result) = self.factor_split_with(a, FactorSplit::llt, State::Llt) {
+            return result;
         }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_llt(
@@ -404,6 +398,39 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
+    /// The factorization `factor` ([`FactorSplit::llt`] or [`FactorSplit::ldlt`]) by the split
+    /// tree where one is prepared ([`Self::prepare_factor_split`]), leaving the factor in `state`
+    /// where it succeeds; `None` where none is. Both cores where the second is idle, else one
+    /// after the other: the same values.
+    fn factor_split_with(
+        &mut self,
+        a: SparseColMatRef<'_, usize, T>,
+        factor: SplitFactorization<T>,
+        state: State,
+    ) -> Option<Result<(), NotFactorable>> {
+        let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
+            (self.symbolic.raw(), self.factor_split.as_ref())
+        else {
+            return None;
+        };
+        let two_cores = crate::linalg::parallel::second_core_idle();
+        let result = factor(
+            split,
+            symbolic,
+            &mut self.values,
+            a,
+            &mut self.split_room,
+            two_cores,
+        );
+        Some(match result {
+            Ok(()) => {
+                self.state = state;
+                Ok(())
+            }
+            Err(_) => Err(NotFactorable),
+        })
+    }
+
     /// Numeric LDLᴴ of `a` without pivoting (upper triangle, same pattern). `Err` on an exactly
     /// zero pivot.
     pub fn ldlt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
@@ -413,24 +440,8 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
-        if let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
-            (self.symbolic.raw(), self.factor_split.as_ref())
-        {
-            // As for LLᴴ: both cores where the second is idle, else one after the other.
-            let two_cores = crate::linalg::parallel::second_core_idle();
-            return match split.ldlt(
-                symbolic,
-                &mut self.values,
-                a,
-                &mut self.split_room,
-                two_cores,
-            ) {
-                Ok(()) => {
-                    self.state = State::Ldlt;
-                    Ok(())
-                }
-                Err(_) => Err(NotFactorable),
-            };
+        if let Some(result) = self.factor_split_with(a, FactorSplit::ldlt, State::Ldlt) {
+            return result;
         }
         let stack = MemStack::new(&mut self.mem);
         let result = self.symbolic.factorize_numeric_ldlt(
