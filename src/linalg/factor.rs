@@ -8,14 +8,14 @@
 //! both are read here from the numeric factor and its symbolic structure.
 
 use crate::linalg::roundoff::gamma_with;
-use crate::linalg::tree_factor::{FactorSplit, SplitRoom};
+use crate::linalg::tree_factor::{FactorSplit, Kind, SplitRoom};
 use crate::linalg::tree_solve::TreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky,
@@ -78,16 +78,6 @@ impl Layout {
         }
     }
 }
-
-/// [`FactorSplit::llt`] or [`FactorSplit::ldlt`].
-type SplitFactorization<T> = fn(
-    &FactorSplit,
-    &SymbolicSupernodalCholesky<usize>,
-    &mut [T],
-    SparseColMatRef<'_, usize, T>,
-    &mut SplitRoom<T>,
-    bool,
-) -> Result<(), crate::linalg::tree_factor::FailedPivot>;
 
 /// The last factorization attempted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -376,7 +366,7 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
-        if let Some(result) = self.factor_split_with(a, FactorSplit::llt, State::Llt) {
+        if let Some(result) = self.factor_split_with(a, Kind::Llt) {
             return result;
         }
         let stack = MemStack::new(&mut self.mem);
@@ -398,15 +388,13 @@ impl<T: Scalar> SparseFactor<T> {
         }
     }
 
-    /// The factorization `factor` ([`FactorSplit::llt`] or [`FactorSplit::ldlt`]) by the split
-    /// tree where one is prepared ([`Self::prepare_factor_split`]), leaving the factor in `state`
-    /// where it succeeds; `None` where none is. Both cores where the second is idle, else one
-    /// after the other: the same values.
+    /// The factorization `kind` by the split tree where one is prepared
+    /// ([`Self::prepare_factor_split`], [`FactorSplit::factorize`]); `None` where none is. Both
+    /// cores where the second is idle, else one after the other: the same values.
     fn factor_split_with(
         &mut self,
         a: SparseColMatRef<'_, usize, T>,
-        factor: SplitFactorization<T>,
-        state: State,
+        kind: Kind,
     ) -> Option<Result<(), NotFactorable>> {
         let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
             (self.symbolic.raw(), self.factor_split.as_ref())
@@ -414,8 +402,8 @@ impl<T: Scalar> SparseFactor<T> {
             return None;
         };
         let two_cores = crate::linalg::parallel::second_core_idle();
-        let result = factor(
-            split,
+        let result = split.factorize(
+            kind,
             symbolic,
             &mut self.values,
             a,
@@ -424,7 +412,10 @@ impl<T: Scalar> SparseFactor<T> {
         );
         Some(match result {
             Ok(()) => {
-                self.state = state;
+                self.state = match kind {
+                    Kind::Llt => State::Llt,
+                    Kind::Ldlt => State::Ldlt,
+                };
                 Ok(())
             }
             Err(_) => Err(NotFactorable),
@@ -440,7 +431,7 @@ impl<T: Scalar> SparseFactor<T> {
             self.allocate();
         }
         self.restore_workspace();
-        if let Some(result) = self.factor_split_with(a, FactorSplit::ldlt, State::Ldlt) {
+        if let Some(result) = self.factor_split_with(a, Kind::Ldlt) {
             return result;
         }
         let stack = MemStack::new(&mut self.mem);
@@ -2075,20 +2066,17 @@ mod tests {
                     for two_cores in [false, true] {
                         let mut ours = vec![T::zero_impl(); faers.len()];
                         let mut room = SplitRoom::default();
-                        let factor = if ldlt {
-                            FactorSplit::ldlt::<T>
-                        } else {
-                            FactorSplit::llt::<T>
-                        };
-                        factor(
-                            &split,
-                            symbolic,
-                            &mut ours,
-                            assembly.matrix.as_ref(),
-                            &mut room,
-                            two_cores,
-                        )
-                        .expect("no failed pivot");
+                        let kind = if ldlt { Kind::Ldlt } else { Kind::Llt };
+                        split
+                            .factorize(
+                                kind,
+                                symbolic,
+                                &mut ours,
+                                assembly.matrix.as_ref(),
+                                &mut room,
+                                two_cores,
+                            )
+                            .expect("no failed pivot");
                         let worst = ours
                             .iter()
                             .zip(&faers)

@@ -70,7 +70,7 @@ pub struct FailedPivot {
 
 /// Which factorization: LLᴴ, or LDLᴴ without pivoting.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Kind {
+pub enum Kind {
     Llt,
     Ldlt,
 }
@@ -170,33 +170,11 @@ impl FactorSplit {
 
     /// The values of L (faer's layout for `symbolic`, so that faer's solves and
     /// [`TreeSplit::solve_in_place`] read them) for `a_lower`, A's lower triangle in the
-    /// factor's own order. The sides run side by side where `two_cores`, else one after the
-    /// other; the values are the same either way.
-    pub fn llt<T: Entry>(
-        &self,
-        symbolic: &SymbolicSupernodalCholesky<usize>,
-        values: &mut [T],
-        a_lower: SparseColMatRef<'_, usize, T>,
-        room: &mut SplitRoom<T>,
-        two_cores: bool,
-    ) -> Result<(), FailedPivot> {
-        self.factor(Kind::Llt, symbolic, values, a_lower, room, two_cores)
-    }
-
-    /// As [`Self::llt`], the LDLᴴ of `a_lower` without pivoting (faer's layout: each pivot on
-    /// its supernode's diagonal, L's entries below it); `Err` on a zero pivot.
-    pub fn ldlt<T: Entry>(
-        &self,
-        symbolic: &SymbolicSupernodalCholesky<usize>,
-        values: &mut [T],
-        a_lower: SparseColMatRef<'_, usize, T>,
-        room: &mut SplitRoom<T>,
-        two_cores: bool,
-    ) -> Result<(), FailedPivot> {
-        self.factor(Kind::Ldlt, symbolic, values, a_lower, room, two_cores)
-    }
-
-    fn factor<T: Entry>(
+    /// factor's own order: LLᴴ, or for [`Kind::Ldlt`] the LDLᴴ without pivoting (each pivot on
+    /// its supernode's diagonal, L's entries below it; `Err` on a zero pivot). The sides run
+    /// side by side where `two_cores`, else one after the other; the values are the same either
+    /// way.
+    pub fn factorize<T: Entry>(
         &self,
         kind: Kind,
         symbolic: &SymbolicSupernodalCholesky<usize>,
@@ -329,7 +307,7 @@ struct Workspace<T> {
     cols: usize,
 }
 
-/// The working memory of [`FactorSplit::llt`] and [`FactorSplit::ldlt`], kept from one
+/// The working memory of [`FactorSplit::factorize`], kept from one
 /// factorization to the next (its pages mapped once): each side's [`Workspace`] and its updates
 /// of the top set.
 pub struct SplitRoom<T> {
