@@ -539,13 +539,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            write_graph(
-                &mut graph,
-                read_report.vertigo.as_ref(),
-                path,
-                format,
-                lines.as_ref(),
-            )
+            super::memory::release_beside(|| {
+                write_graph(
+                    &mut graph,
+                    read_report.vertigo.as_ref(),
+                    path,
+                    format,
+                    lines.as_ref(),
+                )
+            })
         }
         _ => Ok(()),
     };
@@ -707,7 +709,7 @@ fn run3(
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            io::write3_path(&graph, format, path)
+            super::memory::release_beside(|| io::write3_path(&graph, format, path))
         }
         None => Ok(()),
     };
