@@ -9,7 +9,7 @@
 
 use crate::linalg::roundoff::gamma_with;
 use crate::linalg::tree_factor::{FactorSplit, Kind, SplitRoom};
-use crate::linalg::tree_solve::TreeSplit;
+use crate::linalg::tree_solve::{self, TreeSplit};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -467,16 +467,18 @@ impl<T: Scalar> SparseFactor<T> {
         x
     }
 
-    /// Solves A x = b in place with the last successful factorization: an LLᴴ's on two cores
-    /// where its tree's split is prepared ([`Self::prepare_split`]) and the second core is not
-    /// busy with work built ahead (the same bits as faer's own solve).
+    /// Solves A x = b in place with the last successful factorization: a supernodal LLᴴ's by
+    /// [`crate::linalg::tree_solve`], on two cores where its tree's split is prepared
+    /// ([`Self::prepare_split`]) and the second core is not busy with work built ahead (the same
+    /// bits on one core), other factors by faer's solve.
     pub fn solve_in_place(&mut self, b: &mut [T]) {
         clear_upper_avx();
         let n = self.dim();
         assert_eq!(b.len(), n);
-        if crate::linalg::parallel::second_core_idle()
-            && self.solve_split(MatMut::from_column_major_slice_mut(b, n, 1))
-        {
+        if self.solve_supernodal_llt(
+            MatMut::from_column_major_slice_mut(b, n, 1),
+            crate::linalg::parallel::second_core_idle(),
+        ) {
             return;
         }
         let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
@@ -536,28 +538,35 @@ impl<T: Scalar> SparseFactor<T> {
         };
     }
 
-    /// [`Self::solve_in_place`] by the [`TreeSplit`] where one is prepared and the last
-    /// factorization is an LLᴴ; `false` (b untouched) otherwise. The fill-reducing permutation,
-    /// if any, is applied around it as faer's solve applies it.
-    fn solve_split(&mut self, mut b: MatMut<'_, T>) -> bool {
-        let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split), State::Llt) =
-            (self.symbolic.raw(), self.split.as_ref(), self.state)
+    /// [`Self::solve_in_place`] where the last factorization is a supernodal LLᴴ: by the
+    /// [`TreeSplit`] on two cores where one is prepared and `two_cores`, else by
+    /// [`tree_solve::solve_sequential`] (the same bits); `false` (b untouched) for other
+    /// factors. The fill-reducing permutation, if any, is applied around it as faer's solve
+    /// applies it.
+    fn solve_supernodal_llt(&mut self, mut b: MatMut<'_, T>, two_cores: bool) -> bool {
+        let (SymbolicCholeskyRaw::Supernodal(symbolic), State::Llt) =
+            (self.symbolic.raw(), self.state)
         else {
             return false;
         };
         let factor = SupernodalLltRef::new(symbolic, &self.values);
+        let split = self.split.as_ref().filter(|_| two_cores);
+        let solve = |x: MatMut<'_, T>| match split {
+            Some(split) => split.solve_in_place(factor, x),
+            None => tree_solve::solve_sequential(factor, x),
+        };
         match self.symbolic.perm() {
             Some(perm) => {
                 let (fwd, inv) = perm.arrays();
                 let mut x = faer::Mat::<T>::from_fn(b.nrows(), b.ncols(), |i, j| b[(fwd[i], j)]);
-                split.solve_in_place(factor, x.as_mut());
+                solve(x.as_mut());
                 for j in 0..b.ncols() {
                     for (i, &new) in inv.iter().enumerate() {
                         b[(i, j)] = x[(new, j)];
                     }
                 }
             }
-            None => split.solve_in_place(factor, b),
+            None => solve(b),
         }
         true
     }
@@ -568,7 +577,7 @@ impl<T: Scalar> SparseFactor<T> {
     pub fn solve_block_in_place(&mut self, mut b: MatMut<'_, T>) {
         clear_upper_avx();
         assert_eq!(b.nrows(), self.dim());
-        if crate::linalg::parallel::second_core_idle() && self.solve_split(b.rb_mut()) {
+        if self.solve_supernodal_llt(b.rb_mut(), crate::linalg::parallel::second_core_idle()) {
             return;
         }
         let mut mem = MemBuffer::new(
@@ -1788,15 +1797,18 @@ mod tests {
         work
     }
 
-    /// The LLᴴ solve split between two cores ([`TreeSplit`]) is faer's own solve to the last
-    /// bit, real and complex, one and three right-hand sides (stored by columns and by rows),
-    /// with and without a fill-reducing permutation of the factor's own:
-    /// a supernodal factor of a 3D grid's blocked matrix (random values, diagonally dominant),
-    /// whose tree splits into two sides below a top set that both update. (Checked to fail with
-    /// the sides' logged updates applied after the top set instead of at their places, and with
-    /// a side's rows updated in descending order.)
+    /// The LLᴴ solve split between two cores ([`TreeSplit`]) is the sequential one to the last
+    /// bit, and both solve the system as faer's own solve does, to rounding (their supernodes
+    /// of a few columns by other loops), real and complex, one and three right-hand sides (stored
+    /// by columns and by rows), with and without a fill-reducing permutation of the factor's
+    /// own: a supernodal factor of a 3D grid's blocked matrix (random values, diagonally
+    /// dominant), with supernodes on either side of [`tree_solve::LOOP_MAX_COLUMNS`], whose
+    /// tree splits into two sides below a top set that both update. (Checked to fail with the
+    /// sides' logged updates applied after the top set instead of at their places, with a
+    /// side's rows updated in descending order, and with a narrow supernode's backward step
+    /// skipping the rows below it.)
     #[test]
-    fn the_split_solve_is_faers_own_to_the_bit() {
+    fn the_split_solve_is_the_sequential_one_to_the_bit() {
         use crate::linalg::rng::Rng;
         fn check<T: Scalar + crate::linalg::tree_solve::Entry>(draw: impl Fn(&mut Rng) -> T) {
             let (block, edges) = (3, grid_edges(9, 8, 7));
@@ -1861,46 +1873,52 @@ mod tests {
                 };
                 let split = TreeSplit::new(symbolic, 0).expect("a grid's tree splits");
                 assert!(split.sides().iter().all(|s| !s.is_empty()) && split.top() > 0);
+                let widths: Vec<usize> = (0..symbolic.n_supernodes())
+                    .map(|s| symbolic.supernode_end()[s] - symbolic.supernode_begin()[s])
+                    .collect();
+                assert!(widths.iter().any(|&w| w <= tree_solve::LOOP_MAX_COLUMNS));
+                assert!(widths.iter().any(|&w| w > tree_solve::LOOP_MAX_COLUMNS));
                 f.prepare_split_from(0);
                 for k in [1, 3] {
                     let b: Vec<T> = (0..n * k).map(|_| draw(&mut rng)).collect();
-                    let mut faers = b.clone();
                     let mut mem =
                         MemBuffer::new(f.symbolic.solve_in_place_scratch::<T>(k, Par::Seq));
-                    LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
-                        Conj::No,
-                        MatMut::from_column_major_slice_mut(&mut faers, n, k),
-                        Par::Seq,
-                        MemStack::new(&mut mem),
-                    );
-                    let mut split_solve = b.clone();
-                    assert!(f.solve_split(MatMut::from_column_major_slice_mut(
-                        &mut split_solve,
-                        n,
-                        k
-                    )));
-                    assert!(split_solve != b);
                     let bits = |v: &[T]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>();
-                    assert_eq!(
-                        bits(&split_solve),
-                        bits(&faers),
-                        "permuted: {permuted}, {k} columns"
-                    );
-                    // The same right-hand sides stored by rows (a row stride of k).
-                    let mut by_rows = b.clone();
-                    let mut faers_by_rows = b.clone();
-                    LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
-                        Conj::No,
-                        MatMut::from_row_major_slice_mut(&mut faers_by_rows, n, k),
-                        Par::Seq,
-                        MemStack::new(&mut mem),
-                    );
-                    assert!(f.solve_split(MatMut::from_row_major_slice_mut(&mut by_rows, n, k)));
-                    assert_eq!(
-                        bits(&by_rows),
-                        bits(&faers_by_rows),
-                        "by rows, permuted: {permuted}, {k} columns"
-                    );
+                    // Within 1e-12 of faer's solution's largest entry: this matrix is far from
+                    // singular (diagonally dominant), so the two roundings differ by far less.
+                    let near_faers = |v: &[T], faers: &[T]| {
+                        let scale = faers.iter().map(|x| x.modulus()).fold(0.0, f64::max);
+                        v.iter()
+                            .zip(faers)
+                            .all(|(&a, &b)| (a + -b).modulus() <= 1e-12 * scale)
+                    };
+                    for by_rows in [false, true] {
+                        // By rows: the same right-hand sides with a row stride of k.
+                        fn view<T: Scalar>(
+                            v: &mut [T],
+                            (n, k, by_rows): (usize, usize, bool),
+                        ) -> MatMut<'_, T> {
+                            match by_rows {
+                                false => MatMut::from_column_major_slice_mut(v, n, k),
+                                true => MatMut::from_row_major_slice_mut(v, n, k),
+                            }
+                        }
+                        let shape = (n, k, by_rows);
+                        let mut faers = b.clone();
+                        LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                            Conj::No,
+                            view(&mut faers, shape),
+                            Par::Seq,
+                            MemStack::new(&mut mem),
+                        );
+                        let (mut sequential, mut split_solve) = (b.clone(), b.clone());
+                        assert!(f.solve_supernodal_llt(view(&mut sequential, shape), false));
+                        assert!(f.solve_supernodal_llt(view(&mut split_solve, shape), true));
+                        let case = format!("permuted: {permuted}, {k} columns, by rows: {by_rows}");
+                        assert!(split_solve != b);
+                        assert_eq!(bits(&split_solve), bits(&sequential), "{case}");
+                        assert!(near_faers(&sequential, &faers), "{case}");
+                    }
                 }
             }
         }

@@ -1,8 +1,8 @@
-//! A supernodal LLᴴ solve, L Lᴴ x = b, on two cores: the supernodes of the elimination tree
-//! split into two sides of whole subtrees, solved side by side, and a top set (their ancestors,
-//! where the sides meet) solved on one core. Every entry of x goes through the operations of
-//! faer's own sequential solve (`SupernodalLltRef::solve_in_place_with_conj`), on the same
-//! operands and in the same order, so the result is faer's to the last bit:
+//! A supernodal LLᴴ solve, L Lᴴ x = b, on one core ([`solve_sequential`]) or two
+//! ([`TreeSplit`]): the supernodes of the elimination tree split into two sides of whole
+//! subtrees, solved side by side, and a top set (their ancestors, where the sides meet) solved
+//! on one core. Every entry of x goes through the operations of the sequential solve, on the
+//! same operands and in the same order, so the two give the same bits:
 //!
 //! - forward, L y = b: supernode s solves its diagonal block and subtracts L_bs y_s from the
 //!   rows below it, which are its ancestors'. A row of a side is updated by its descendants
@@ -17,7 +17,11 @@
 //! faer's solve is sequential, and its parallel mode (`Par::rayon`) parallelizes the dense
 //! kernels inside a supernode, not the tree: at the sizes of pose graphs most supernodes are a
 //! few columns wide, and the solve reads the factor once forward and once backward. Written here
-//! for that reason; the dense kernels are faer's.
+//! for that reason. A supernode of more than [`LOOP_MAX_COLUMNS`] columns is solved by faer's
+//! dense kernels, the operations of faer's own solve (`SupernodalLltRef::solve_in_place_with_conj`);
+//! a narrower one by plain loops, without the dense kernels' dispatch, which costs more than
+//! the few multiply-adds of such a supernode (one Newton solve of cityTrees10000, 4454
+//! supernodes, all but one at most 12 columns wide: 0.45 ms against faer's 0.96 ms).
 
 use faer::linalg::matmul::matmul_with_conj;
 use faer::linalg::triangular_solve::{
@@ -28,19 +32,98 @@ use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSuper
 use faer::traits::ComplexField;
 use faer::{Accum, Conj, MatMut, Par};
 
-/// The scalars of the solve: faer's, with the arithmetic its solve applies to them.
+/// The scalars of the solve: faer's, with the arithmetic its solve and the loops apply to them.
 pub trait Entry:
-    ComplexField + Copy + Send + Sync + std::ops::Neg<Output = Self> + std::ops::SubAssign
+    ComplexField
+    + Copy
+    + Send
+    + Sync
+    + std::ops::Neg<Output = Self>
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::AddAssign
+    + std::ops::SubAssign
 {
 }
 
 impl<T> Entry for T where
-    T: ComplexField + Copy + Send + Sync + std::ops::Neg<Output = T> + std::ops::SubAssign
+    T: ComplexField
+        + Copy
+        + Send
+        + Sync
+        + std::ops::Neg<Output = T>
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<Output = T>
+        + std::ops::AddAssign
+        + std::ops::SubAssign
 {
+}
+
+/// Column c of a supernode's stored values (its diagonal block's rows, then the rows below),
+/// which faer keeps by columns.
+fn stored_column<T: Entry>(l: faer::MatRef<'_, T>, c: usize) -> &[T] {
+    l.col(c)
+        .try_as_col_major()
+        .expect("a supernode's values are stored by columns")
+        .as_slice()
+}
+
+/// A column of the solve's own workspace, stored by columns.
+fn column<T: Entry>(col: faer::col::ColMut<'_, T>) -> &mut [T] {
+    col.try_as_col_major_mut()
+        .expect("the workspace is stored by columns")
+        .as_slice_mut()
+}
+
+/// 1 / Re(d) times x: the division by a diagonal entry of an LLᴴ factor, which is real.
+fn divided_by_real<T: Entry>(x: T, d: T) -> T {
+    T::mul_real_impl(
+        &x,
+        &<T::Real as ComplexField>::recip_impl(&T::real_part_impl(&d)),
+    )
 }
 
 /// Who solves a supernode: one of the two sides, or the top set.
 const TOP: u8 = 2;
+
+/// The widest supernode (in columns) solved by plain loops instead of faer's dense kernels.
+/// Measured on Newton systems' factors (one solve, the best of five, loops/faer's whole solve)
+/// with the loops up to 4, 8, 16 and 32 columns: cityTrees10000 0.93/0.99, 0.87/0.98,
+/// 0.45/0.96, 0.46/0.98 ms; M3500 0.37/0.39, 0.27/0.39, 0.22/0.39, 0.22/0.39; city10000
+/// 1.42/1.49, 1.02/1.28, 0.89/1.26, 0.92/1.30; torus3D (3D, wider supernodes) 4.7/4.2,
+/// 3.5/3.7, 2.7/3.2, 3.0/3.4; parking-garage 0.35/0.34, 0.34/0.34, 0.28/0.34, 0.26/0.33.
+pub const LOOP_MAX_COLUMNS: usize = 16;
+
+/// Solves L Lᴴ X = B in place on this thread (`x`: B on entry, X on return, in the factor's own
+/// order), supernode by supernode: forward in ascending order, backward in descending order,
+/// the bits of [`TreeSplit::solve_in_place`].
+pub fn solve_sequential<T: Entry>(factor: SupernodalLltRef<'_, usize, T>, x: MatMut<'_, T>) {
+    let symbolic = factor.symbolic();
+    assert_eq!(x.nrows(), symbolic.nrows());
+    let shared = Shared {
+        ptr: x.as_ptr_mut(),
+        k: x.ncols(),
+        row_stride: x.row_stride(),
+        col_stride: x.col_stride(),
+    };
+    let mut step = Step::new(factor, &shared, max_pattern(symbolic));
+    for s in 0..symbolic.n_supernodes() {
+        step.forward(s, |_, _| true);
+    }
+    for s in (0..symbolic.n_supernodes()).rev() {
+        step.backward(s);
+    }
+}
+
+/// The most rows below any supernode's columns.
+fn max_pattern(symbolic: &SymbolicSupernodalCholesky<usize>) -> usize {
+    (0..symbolic.n_supernodes())
+        .map(|s| symbolic.supernode(s).pattern().len())
+        .max()
+        .unwrap_or(0)
+}
 
 /// The split of a supernodal factor's elimination tree between two cores ([`TreeSplit::new`]).
 #[derive(Debug, Clone)]
@@ -229,7 +312,7 @@ impl TreeSplit {
     }
 
     /// Solves L Lᴴ X = B in place (`x`: B on entry, X on return, in the factor's own order: no
-    /// fill-reducing permutation applied here), the same bits as faer's sequential solve.
+    /// fill-reducing permutation applied here), the same bits as [`solve_sequential`].
     pub fn solve_in_place<T: Entry>(
         &self,
         factor: SupernodalLltRef<'_, usize, T>,
@@ -244,10 +327,7 @@ impl TreeSplit {
             row_stride: x.row_stride(),
             col_stride: x.col_stride(),
         };
-        let max_pattern = (0..symbolic.n_supernodes())
-            .map(|s| symbolic.supernode(s).pattern().len())
-            .max()
-            .unwrap_or(0);
+        let max_pattern = max_pattern(symbolic);
         let side = |side: usize, forward: bool| {
             let mut step = Step::new(factor, &shared, max_pattern);
             let mut log = Vec::new();
@@ -388,23 +468,43 @@ impl<'a, 's, T: Entry> Step<'a, 's, T> {
         let (l_top, l_bot) = l.split_at_row(size);
         // SAFETY: supernode s's rows are this thread's alone (module docs).
         let mut x_top = unsafe { self.x.rows(start, size) };
-        solve_lower_triangular_in_place_with_conj(l_top, Conj::No, x_top.rb_mut(), Par::Seq);
         let k = self.x.k;
         let mut tmp = MatMut::from_column_major_slice_mut(
             &mut self.tmp[..pattern.len() * k],
             pattern.len(),
             k,
         );
-        matmul_with_conj(
-            tmp.rb_mut(),
-            Accum::Replace,
-            l_bot,
-            Conj::No,
-            x_top.rb(),
-            Conj::No,
-            T::one_impl(),
-            Par::Seq,
-        );
+        if size <= LOOP_MAX_COLUMNS {
+            // Column by column: y_c = x_c / L_cc, then y_c's multiples of column c subtracted
+            // from the rows of the block below it and added up for the rows below the block.
+            for j in 0..k {
+                let t = column(tmp.rb_mut().col_mut(j));
+                t.fill(T::zero_impl());
+                for c in 0..size {
+                    let col = stored_column(l, c);
+                    let y = divided_by_real(x_top[(c, j)], col[c]);
+                    x_top[(c, j)] = y;
+                    for r in c + 1..size {
+                        x_top[(r, j)] -= col[r] * y;
+                    }
+                    for (t, &v) in t.iter_mut().zip(&col[size..]) {
+                        *t += v * y;
+                    }
+                }
+            }
+        } else {
+            solve_lower_triangular_in_place_with_conj(l_top, Conj::No, x_top.rb_mut(), Par::Seq);
+            matmul_with_conj(
+                tmp.rb_mut(),
+                Accum::Replace,
+                l_bot,
+                Conj::No,
+                x_top.rb(),
+                Conj::No,
+                T::one_impl(),
+                Par::Seq,
+            );
+        }
         for j in 0..k {
             for (idx, &row) in pattern.iter().enumerate() {
                 let t = tmp[(idx, j)];
@@ -436,6 +536,26 @@ impl<'a, 's, T: Entry> Step<'a, 's, T> {
         }
         // SAFETY: supernode s's rows are this thread's alone.
         let mut x_top = unsafe { self.x.rows(start, size) };
+        if size <= LOOP_MAX_COLUMNS {
+            // Column by column, last first: x_c −= L_bcᴴ x_b + Σ_{r>c} conj(L_rc) x_r, then
+            // divided by L_cc (real).
+            for j in 0..k {
+                let t = column(tmp.rb_mut().col_mut(j));
+                for c in (0..size).rev() {
+                    let col = stored_column(l, c);
+                    let mut below = T::zero_impl();
+                    for (&v, &t) in col[size..].iter().zip(t.iter()) {
+                        below += T::conj_impl(&v) * t;
+                    }
+                    let mut x = x_top[(c, j)] - below;
+                    for r in c + 1..size {
+                        x -= T::conj_impl(&col[r]) * x_top[(r, j)];
+                    }
+                    x_top[(c, j)] = divided_by_real(x, col[c]);
+                }
+            }
+            return;
+        }
         matmul_with_conj(
             x_top.rb_mut(),
             Accum::Add,
