@@ -49,7 +49,7 @@ use faer::linalg::triangular_solve::{
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
-use faer::traits::math_utils::{mul_real, real, recip};
+use faer::traits::math_utils::{conj, from_real, mul_real, real, recip, sqrt};
 use faer::{Accum, Conj, MatMut, MatRef, Par, Spec};
 
 /// The scalars of the factorization: those of the split solve, which are added to as well.
@@ -61,6 +61,50 @@ impl<T> Entry for T where T: super::tree_solve::Entry + std::ops::AddAssign {}
 /// block by block of contiguous rows and columns; below, it is one product of its own, then
 /// subtracted entry by entry.
 const MIN_ENTRIES_PER_PRODUCT: usize = 64;
+
+/// The widest supernode (in columns) whose LLᴴ ends by plain loops ([`llt_by_columns`]) instead
+/// of faer's dense Cholesky and triangular solve, whose dispatch costs more than such a block's
+/// few multiply-adds (cityTrees10000's Newton systems: 4454 supernodes, all but one at most 12
+/// columns wide). Whole process against faer's kernels for every supernode (medians of 21
+/// interleaved ratios), loops up to 8, 16 and 32 columns: cityTrees10000 0.99, 0.95, 0.95;
+/// M3500 1.01, 1.01, 1.00; city10000 0.99, 0.99, 1.01; torus3D 1.01, 1.00, 1.04. The LDLᴴ keeps
+/// faer's kernels.
+pub const LOOP_MAX_COLUMNS: usize = 16;
+
+/// The end of a supernode's LLᴴ, column by column: its block (`rows` × `k`, stored by columns,
+/// the diagonal block's rows first), its updates subtracted, becomes [L_ss; L_bs] with
+/// L_ss L_ssᴴ = A_ss and L_bs = A_bs L_ss⁻ᴴ: for each column j, l_jj = √(a_jj − Σ_{p<j} |l_jp|²)
+/// and l_ij = (a_ij − Σ_{p<j} l_ip conj(l_jp)) / l_jj for the rows i below it, the diagonal
+/// block's and those below alike. The strictly upper triangle is not touched. `Err(j)` where
+/// the pivot of column j is not positive (or not a number). A standard Cholesky: each entry a
+/// sum of its products in some order, a square root, a product with the rounded reciprocal of
+/// l_jj, as in faer's dense kernel, so the backward-error bounds that the certificates' shifted
+/// LLᴴ proofs assume (`try_eta`'s α) hold for it as for faer's.
+fn llt_by_columns<T: Entry>(block: &mut [T], rows: usize, k: usize) -> Result<(), usize> {
+    for j in 0..k {
+        let (done, rest) = block.split_at_mut(j * rows);
+        let column = &mut rest[j..rows];
+        for p in 0..j {
+            let left = &done[p * rows + j..(p + 1) * rows];
+            let c = conj(&left[0]);
+            for (x, &l) in column.iter_mut().zip(left) {
+                *x -= l * c;
+            }
+        }
+        let pivot = real(&column[0]);
+        let zero = <T::Real as faer::traits::ComplexField>::zero_impl();
+        if pivot.partial_cmp(&zero) != Some(std::cmp::Ordering::Greater) {
+            return Err(j);
+        }
+        let diagonal = sqrt(&pivot);
+        column[0] = from_real(&diagonal);
+        let inverse = recip(&diagonal);
+        for x in &mut column[1..] {
+            *x = mul_real(x, &inverse);
+        }
+    }
+    Ok(())
+}
 
 /// The factorization failed at the pivot of column `index`: not positive (LLᴴ), or zero (LDLᴴ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -572,6 +616,9 @@ impl<T: Entry> Workspace<T> {
             index: index + s_start,
         };
         match kind {
+            Kind::Llt if k <= LOOP_MAX_COLUMNS => {
+                llt_by_columns(block, rows, k).map_err(failed)?;
+            }
             Kind::Llt => {
                 cholesky_in_place(
                     top.rb_mut(),
