@@ -115,6 +115,20 @@ impl TangentBasis {
         out
     }
 
+    /// The Euclidean norm of [`Self::coordinates`] of `v`, the same sum, without the vector.
+    pub fn coordinates_norm(&self, v: &[c64]) -> f64 {
+        let p = self.p;
+        let mut sum = 0.0;
+        for k in 0..self.rows {
+            let row = &v[k * p..(k + 1) * p];
+            for s in 0..self.len(k) {
+                let c = dot(self.vector(k, s), row).re;
+                sum += c * c;
+            }
+        }
+        sum.sqrt()
+    }
+
     /// The pattern of the Hessian in these coordinates (upper triangle), one entry per value
     /// [`TangentBasis::hessian_values`] produces, in the same order.
     pub fn hessian_pattern(&self, problem: &Problem) -> Vec<(usize, usize)> {
@@ -442,6 +456,30 @@ mod tests {
             row.iter_mut().for_each(|a| *a /= norm);
         }
         Point { p, x }
+    }
+
+    /// [`TangentBasis::coordinates_norm`] is the norm of the coordinates, to the bit (the
+    /// staircase compares it with an iterate's gradient norm), at ranks 1 to 3.
+    #[test]
+    fn the_coordinates_norm_is_the_norm_of_the_coordinates() {
+        let problem = square();
+        for p in 1..=3 {
+            let x = point(&problem, p);
+            let basis = TangentBasis::new(&problem, &x);
+            let g = problem.half_gradient(&x);
+            let norm = basis
+                .coordinates(&g)
+                .iter()
+                .map(|c| c * c)
+                .sum::<f64>()
+                .sqrt();
+            assert!(norm > 0.0);
+            assert_eq!(
+                basis.coordinates_norm(&g).to_bits(),
+                norm.to_bits(),
+                "rank {p}"
+            );
+        }
     }
 
     /// Each row's basis is orthonormal in ℝ^{2p} (Re⟨a, b⟩ = δ_ab), a rotation row's is
