@@ -1890,7 +1890,7 @@ mod tests {
                         let scale = faers.iter().map(|x| x.modulus()).fold(0.0, f64::max);
                         v.iter()
                             .zip(faers)
-                            .all(|(&a, &b)| (a + -b).modulus() <= 1e-12 * scale)
+                            .all(|(&a, &b)| (a - b).modulus() <= 1e-12 * scale)
                     };
                     for by_rows in [false, true] {
                         // By rows: the same right-hand sides with a row stride of k.

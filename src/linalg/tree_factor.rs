@@ -52,10 +52,8 @@ use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::traits::math_utils::{conj, from_real, mul_real, real, recip, sqrt};
 use faer::{Accum, Conj, MatMut, MatRef, Par, Spec};
 
-/// The scalars of the factorization: those of the split solve, which are added to as well.
-pub trait Entry: super::tree_solve::Entry + std::ops::AddAssign {}
-
-impl<T> Entry for T where T: super::tree_solve::Entry + std::ops::AddAssign {}
+/// The scalars of the factorization: those of the split solve.
+pub use super::tree_solve::Entry;
 
 /// The fewest entries per product (on average) for which an update is subtracted in place,
 /// block by block of contiguous rows and columns; below, it is one product of its own, then

@@ -30,6 +30,7 @@ use faer::linalg::triangular_solve::{
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::traits::ComplexField;
+use faer::traits::math_utils::{conj, mul_real, real, recip};
 use faer::{Accum, Conj, MatMut, Par};
 
 /// The scalars of the solve: faer's, with the arithmetic its solve and the loops apply to them.
@@ -79,10 +80,7 @@ fn column<T: Entry>(col: faer::col::ColMut<'_, T>) -> &mut [T] {
 
 /// 1 / Re(d) times x: the division by a diagonal entry of an LLᴴ factor, which is real.
 fn divided_by_real<T: Entry>(x: T, d: T) -> T {
-    T::mul_real_impl(
-        &x,
-        &<T::Real as ComplexField>::recip_impl(&T::real_part_impl(&d)),
-    )
+    mul_real(&x, &recip(&real(&d)))
 }
 
 /// Who solves a supernode: one of the two sides, or the top set.
@@ -545,11 +543,11 @@ impl<'a, 's, T: Entry> Step<'a, 's, T> {
                     let col = stored_column(l, c);
                     let mut below = T::zero_impl();
                     for (&v, &t) in col[size..].iter().zip(t.iter()) {
-                        below += T::conj_impl(&v) * t;
+                        below += conj(&v) * t;
                     }
                     let mut x = x_top[(c, j)] - below;
                     for r in c + 1..size {
-                        x -= T::conj_impl(&col[r]) * x_top[(r, j)];
+                        x -= conj(&col[r]) * x_top[(r, j)];
                     }
                     x_top[(c, j)] = divided_by_real(x, col[c]);
                 }
