@@ -43,15 +43,6 @@ pub enum Layout {
     /// below 15 simplicial stays ahead: M3500 (13) 4.1/2.9 and 3.0/4.4 ms on two runs,
     /// cityTrees10000 (7.5) 4.4/8.8 ms, ais2klinik (4.9) 4.4/10.9 ms.
     AutoComplex,
-    /// As `Auto`, with the crossover measured for the staircase's real Newton systems (the
-    /// planar ones: 1x1 rotation and 2x2 position blocks at rank 1): supernodal from a flop
-    /// ratio of 12. On sparser factors the supernodes are small and their padding and per-block
-    /// overhead cost more than the dense kernels gain; the solve suffers most. Measured (median
-    /// of 31 assemblies + LLᵀ + solves of each layout, interleaved, simplicial/supernodal):
-    /// ratio 4-7 (kitti, ais2klinik, CSAIL, MIT, ring) 0.53-0.71, victoriaPark (8.5) 0.69,
-    /// intel (9.8) 0.86, FRH (9.4) 1.02, intel_openslam (12.9) 1.10, cityTrees10000 (14.6)
-    /// 0.97, M3500 (19) 1.23-1.29, w10000 (35) 2.2, city10000 (43.5) 2.5.
-    AutoNewton,
     Simplicial,
     Supernodal,
 }
@@ -61,7 +52,6 @@ impl Layout {
         match self {
             Layout::Auto => SupernodalThreshold::AUTO,
             Layout::AutoComplex => SupernodalThreshold(15.0 / 40.0),
-            Layout::AutoNewton => SupernodalThreshold(12.0 / 40.0),
             Layout::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
             Layout::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
         }
@@ -72,9 +62,7 @@ impl Layout {
     pub fn stored_side(self) -> Side {
         match self {
             Layout::Supernodal => Side::Lower,
-            Layout::Auto | Layout::AutoComplex | Layout::AutoNewton | Layout::Simplicial => {
-                Side::Upper
-            }
+            Layout::Auto | Layout::AutoComplex | Layout::Simplicial => Side::Upper,
         }
     }
 }
@@ -401,7 +389,7 @@ impl<T: Scalar> SparseFactor<T> {
         else {
             return None;
         };
-        let two_cores = crate::linalg::parallel::second_core_idle();
+        let two_cores = split.splits() && crate::linalg::parallel::second_core_idle();
         let result = split.factorize(
             kind,
             symbolic,
@@ -525,9 +513,25 @@ impl<T: Scalar> SparseFactor<T> {
         };
     }
 
+    /// As [`Self::prepare_factor_split`], and where the LLᴴ does not split (less work than
+    /// `min_work`, or a tree that does not divide), the same code on one core, one supernode after
+    /// another ([`FactorSplit::sequential`]): its narrow supernodes by plain loops
+    /// ([`crate::linalg::tree_factor`]) instead of faer's dense kernels, one call each.
+    pub fn prepare_own_factorization(&mut self, min_work: f64) {
+        self.prepare_factor_split(min_work);
+        if let (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower, None) = (
+            self.symbolic.raw(),
+            self.symbolic.perm(),
+            self.side,
+            &self.factor_split,
+        ) {
+            self.factor_split = Some(FactorSplit::sequential(symbolic));
+        }
+    }
+
     /// Whether the factorizations are split between the cores ([`Self::prepare_factor_split`]).
     pub fn splits_factorizations(&self) -> bool {
-        self.factor_split.is_some()
+        self.factor_split.as_ref().is_some_and(FactorSplit::splits)
     }
 
     /// [`Self::prepare_split`] from `min_values` stored values.
@@ -937,14 +941,6 @@ impl Slots {
         }
     }
 
-    /// Replaces each slot s with `moved[s]`.
-    fn relocate(&mut self, moved: &[usize]) {
-        match self {
-            Slots::Narrow(v) => v.iter_mut().for_each(|s| *s = moved[*s as usize] as u32),
-            Slots::Wide(v) => v.iter_mut().for_each(|s| *s = moved[*s]),
-        }
-    }
-
     fn len(&self) -> usize {
         match self {
             Slots::Narrow(v) => v.len(),
@@ -1198,44 +1194,6 @@ impl<T: Scalar> Assembly<T> {
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
         let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
         Assembly { matrix, slots }
-    }
-
-    /// The same real symmetric matrix stored as the other triangle (the transpose of the stored
-    /// one), each entry's slot moved with it, so that [`Assembly::fill`] sums the same values
-    /// in the same order: a counting sort of the stored entries by row, O(nnz), cheaper than
-    /// assembling again. One pass over the stored columns places each entry in its row's bucket
-    /// (the new column) and records where it went; the slots and the value array are reused. At
-    /// 10⁶ planar poses (14·10⁶ entries) its fresh arrays were most of its time in page faults.
-    pub fn transposed(self) -> Self {
-        assert!(
-            T::IS_REAL,
-            "Assembly::transposed: real symmetric matrices only"
-        );
-        let Assembly { matrix, mut slots } = self;
-        let (symbolic, values) = matrix.into_parts();
-        let (dim, col_ptr, row_idx) = (symbolic.ncols(), symbolic.col_ptr(), symbolic.row_idx());
-        let nnz = row_idx.len();
-        let new_ptr = bucket_starts(dim, row_idx.iter().copied());
-        // Row r of the stored triangle becomes column r of the other; columns visited in order,
-        // so each new column's rows come sorted.
-        let mut next = new_ptr.clone();
-        let mut new_row = vec![0usize; nnz];
-        let mut moved = vec![0usize; nnz];
-        for c in 0..dim {
-            for p in col_ptr[c]..col_ptr[c + 1] {
-                let at = &mut next[row_idx[p]];
-                new_row[*at] = c;
-                moved[p] = *at;
-                *at += 1;
-            }
-        }
-        drop(symbolic);
-        slots.relocate(&moved);
-        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, new_ptr, None, new_row);
-        Assembly {
-            matrix: SparseColMat::new(symbolic, values),
-            slots,
-        }
     }
 
     /// Rewrites the values: entry k of the pattern receives `values[k]` (summed over duplicates).
@@ -2088,9 +2046,16 @@ mod tests {
                 let narrow = crate::linalg::tree_factor::LOOP_MAX_COLUMNS;
                 assert!(widths.iter().any(|&w| w <= narrow) && widths.iter().any(|&w| w > narrow));
                 let mut bits: Option<Vec<String>> = None;
-                for min_entries in [0, usize::MAX] {
-                    let mut split = FactorSplit::new(symbolic, 0.0).expect("the tree splits");
-                    assert!(split.sides().iter().all(|s| !s.is_empty()) && split.top() > 0);
+                // Split into two sides and a top set, and not split at all (one side).
+                let sequential = FactorSplit::sequential(symbolic);
+                assert!(!sequential.splits() && sequential.top() == 0);
+                let splits = [0, usize::MAX].map(|min_entries| {
+                    let split = FactorSplit::new(symbolic, 0.0).expect("the tree splits");
+                    assert!(split.splits() && split.top() > 0);
+                    (split, min_entries)
+                });
+                let unsplit = [0, usize::MAX].map(|min_entries| (sequential.clone(), min_entries));
+                for (mut split, min_entries) in splits.into_iter().chain(unsplit) {
                     split.min_entries_per_product = min_entries;
                     for two_cores in [false, true] {
                         let mut ours = vec![T::zero_impl(); faers.len()];
@@ -2115,7 +2080,7 @@ mod tests {
                             .fold(0.0, f64::max);
                         assert!(worst <= 1e-13 * scale, "seed {seed}: {worst:e}");
                         let these: Vec<String> = ours.iter().map(|x| format!("{x:?}")).collect();
-                        if min_entries == 0 {
+                        if min_entries == 0 && split.splits() {
                             match &bits {
                                 None => bits = Some(these),
                                 Some(b) => assert_eq!(b, &these, "one core against two"),
@@ -2129,9 +2094,35 @@ mod tests {
 
     /// A matrix that is not positive definite is refused by the split factorization as by
     /// faer's, where its trouble is on a side and where it is in the top set, and the factor
-    /// (same split, same room) factors the next matrix as if nothing had failed.
+    /// (same split, same room) factors the next matrix as if nothing had failed; likewise by the
+    /// factorization that does not split ([`SparseFactor::prepare_own_factorization`] with more
+    /// work asked than there is).
     #[test]
     fn the_split_factorization_refuses_what_is_not_positive_definite() {
+        let GridFactor {
+            mut assembly,
+            entries,
+            values,
+            factor: mut f,
+        } = grid_factor(&|rng| rng.normal(), 5);
+        f.prepare_own_factorization(f64::INFINITY);
+        assert!(f.factor_split.is_some() && !f.splits_factorizations());
+        assembly.fill(&values);
+        f.llt(assembly.matrix.as_ref())
+            .expect("diagonally dominant");
+        let good = f.values.clone();
+        for row in [0, f.dim() / 2, f.dim() - 1] {
+            let mut bad = values.clone();
+            let k = entries.iter().position(|&e| e == (row, row)).unwrap();
+            bad[k] = -1.0;
+            assembly.fill(&bad);
+            assert!(f.llt(assembly.matrix.as_ref()).is_err(), "row {row}");
+            assembly.fill(&values);
+            f.llt(assembly.matrix.as_ref())
+                .expect("diagonally dominant");
+            assert!(f.values == good, "row {row}");
+        }
+
         let GridFactor {
             mut assembly,
             entries,
@@ -2186,7 +2177,7 @@ mod tests {
     }
 
     /// The 32-bit and 64-bit slots hold the same indices through every operation, against a
-    /// plain list kept beside them: pushed, set, relocated by a permutation, read back in order.
+    /// plain list kept beside them: pushed, set, read back in order.
     #[test]
     fn narrow_and_wide_slots_agree() {
         let mut rng = crate::linalg::rng::Rng::new(7);
@@ -2205,13 +2196,6 @@ mod tests {
             narrow.set(k, at);
             wide.set(k, at);
         }
-        let mut moved: Vec<usize> = (0..n).collect();
-        for k in (1..n).rev() {
-            moved.swap(k, below(k + 1));
-        }
-        plain.iter_mut().for_each(|s| *s = moved[*s]);
-        narrow.relocate(&moved);
-        wide.relocate(&moved);
         for slots in [&narrow, &wide] {
             assert_eq!(slots.len(), n);
             let mut it = slots.iter();
@@ -2343,8 +2327,7 @@ mod tests {
 
     /// `Assembly::blocked` against `Assembly::permuted` given the expanded entries and order:
     /// the same pattern and the same slot for every entry, on random block patterns (sizes 0 to
-    /// 6, repeated pairs, every diagonal or not) in random orders, both triangles; and
-    /// `Assembly::transposed` of the upper one against the lower one.
+    /// 6, repeated pairs, every diagonal or not) in random orders, both triangles.
     #[test]
     fn blocked_matches_the_entrywise_assembly() {
         let mut rng = crate::linalg::rng::Rng::new(17);
@@ -2389,13 +2372,6 @@ mod tests {
                 assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} {side:?}");
                 assert_eq!(by_entry.slots, by_block.slots, "trial {trial} {side:?}");
             }
-            // The upper triangle transposed is the lower one assembled entry by entry.
-            let lower = Assembly::<f64>::permuted(offset[nb], &entries, &expanded, Side::Lower);
-            let moved = Assembly::<f64>::blocked(&sizes, &blocks, &order, Side::Upper).transposed();
-            let (p, q) = (lower.matrix.symbolic(), moved.matrix.symbolic());
-            assert_eq!(p.col_ptr(), q.col_ptr(), "trial {trial} transposed");
-            assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} transposed");
-            assert_eq!(lower.slots, moved.slots, "trial {trial} transposed");
         }
     }
 

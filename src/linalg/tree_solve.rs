@@ -289,6 +289,16 @@ impl TreeSplit {
         })
     }
 
+    /// Every supernode on side 0: none on side 1 or in the top set.
+    pub fn one_side(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
+        let ns = symbolic.n_supernodes();
+        TreeSplit {
+            owner: vec![0; ns],
+            top_row: vec![0; symbolic.nrows().div_ceil(64)],
+            sides: [(0..ns as u32).collect(), Vec::new()],
+        }
+    }
+
     /// The supernodes of each side.
     pub fn sides(&self) -> &[Vec<u32>; 2] {
         &self.sides

@@ -183,10 +183,12 @@ impl System {
         // Poses in the fill-reducing order, each pose's coordinates together.
         let poses = group_ordering(problem.pose_rank(), &(0..n).collect::<Vec<_>>());
         let order = block_coordinates(&poses, &offset);
-        // Supernodal, assembled directly in its elimination order and triangle (faer then factors
-        // it without a permuted copy). The planar systems choose by flop ratio
-        // ([`Layout::AutoNewton`]); with 6x6 pose blocks these have ratios of 27 to 199 on the
-        // public 3D files (9 on tinyGrid3D's 9 poses), far above its crossover of 12.
+        // Supernodal, assembled directly in its elimination order and triangle (factored without
+        // a permuted copy), as the planar systems: with 6x6 pose blocks these have flop ratios of
+        // 27 to 199 on the public 3D files (9 on tinyGrid3D's 9 poses). By our own code
+        // ([`SparseFactor::prepare_own_factorization`]); where it does not split, on one core
+        // with the narrow supernodes by loops: smallGrid3D 0.96 of faer's time whole process (41
+        // interleaved runs), tinyGrid3D 1.00.
         let layout = Layout::Supernodal;
         let assembly = Assembly::blocked(&dims, &problem.pairs, &poses, layout.stored_side());
         let mut factor = SparseFactor::analyze_in_order(
@@ -195,7 +197,7 @@ impl System {
             layout,
         );
         factor.prepare_split();
-        factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
+        factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
         System {
             p,
             offset,

@@ -7,7 +7,6 @@
 use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor, block_coordinates};
 use crate::problem::matrix::entry_pattern;
 use crate::problem::rank_p::{Point, Problem, dot};
-use faer::Side;
 use faer::c64;
 
 /// An orthonormal real basis of the tangent space at each row (as complex p-vectors):
@@ -371,22 +370,26 @@ impl NewtonSystem {
         let blocks = entry_pattern(&problem.matrix.upper);
         let row_order = problem.row_order();
         let order = block_coordinates(&row_order, &offsets);
-        // The layout from the factor's flop ratio, with the crossover measured on these systems
-        // ([`Layout::AutoNewton`]); assembled directly in its order and in the triangle its
-        // factorizations read (a supernodal factor's is the lower one: the upper transposed).
-        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, Side::Upper);
-        let factor = SparseFactor::analyze_in_order(
+        // Supernodal, assembled directly in its order and in the triangle its factorizations
+        // read, and factored by our own code ([`SparseFactor::prepare_own_factorization`]: split
+        // between the cores from SPLIT_FACTOR_MIN_WORK, else on one, the narrow supernodes by
+        // plain loops). With faer's kernels for every supernode the sparser systems were faster
+        // simplicial (faer's up-looking LLᵀ, chosen by a flop ratio below 12: ais2klinik, CSAIL,
+        // MIT, the kitti files, victoriaPark, intel); against that, whole process, 11-15
+        // interleaved runs: ais2klinik 0.85, intel 0.88-0.96, victoriaPark 0.90-0.97, FRH 0.94,
+        // ring 0.96, kitti_00 and kitti_02 0.975, MIT 0.98-1.01, CSAIL 1.01-1.03. Fundamental
+        // supernodes (no relaxation: the fewest stored zeros) were slower with these loops too:
+        // 1.06 (MIT) to 1.41 (M3500). Above SPLIT_FACTOR_MAX_ROWS, faer's supernodal LLᵀ.
+        let layout = Layout::Supernodal;
+        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, layout.stored_side());
+        let mut factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
-            Side::Upper,
-            Layout::AutoNewton,
+            layout.stored_side(),
+            layout,
         );
-        let (assembly, mut factor) = match factor.read_side() {
-            Side::Upper => (assembly, factor),
-            Side::Lower => (assembly.transposed(), factor.given(Side::Lower)),
-        };
         factor.prepare_split();
         if factor.dim() <= SPLIT_FACTOR_MAX_ROWS {
-            factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
+            factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
         }
         NewtonSystem {
             assembly,
