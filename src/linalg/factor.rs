@@ -2099,58 +2099,47 @@ mod tests {
     /// work asked than there is).
     #[test]
     fn the_split_factorization_refuses_what_is_not_positive_definite() {
-        let GridFactor {
-            mut assembly,
-            entries,
-            values,
-            factor: mut f,
-        } = grid_factor(&|rng| rng.normal(), 5);
-        f.prepare_own_factorization(f64::INFINITY);
-        assert!(f.factor_split.is_some() && !f.splits_factorizations());
-        assembly.fill(&values);
-        f.llt(assembly.matrix.as_ref())
-            .expect("diagonally dominant");
-        let good = f.values.clone();
-        for row in [0, f.dim() / 2, f.dim() - 1] {
-            let mut bad = values.clone();
-            let k = entries.iter().position(|&e| e == (row, row)).unwrap();
-            bad[k] = -1.0;
-            assembly.fill(&bad);
-            assert!(f.llt(assembly.matrix.as_ref()).is_err(), "row {row}");
+        for split in [true, false] {
+            let GridFactor {
+                mut assembly,
+                entries,
+                values,
+                factor: mut f,
+            } = grid_factor(&|rng| rng.normal(), 5);
+            let n = f.dim();
+            // Split: a row on a side and one in the top set; not split: the first, middle and
+            // last pivots.
+            let rows = if split {
+                f.prepare_factor_split(0.0);
+                let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
+                    panic!("supernodal");
+                };
+                let split = f.factor_split.as_ref().expect("the tree splits");
+                assert!(split.splits());
+                vec![
+                    symbolic.supernode_begin()[split.sides()[0][0] as usize],
+                    n - 1,
+                ]
+            } else {
+                f.prepare_own_factorization(f64::INFINITY);
+                assert!(f.factor_split.is_some() && !f.splits_factorizations());
+                vec![0, n / 2, n - 1]
+            };
             assembly.fill(&values);
             f.llt(assembly.matrix.as_ref())
                 .expect("diagonally dominant");
-            assert!(f.values == good, "row {row}");
-        }
-
-        let GridFactor {
-            mut assembly,
-            entries,
-            values,
-            factor: mut f,
-        } = grid_factor(&|rng| rng.normal(), 5);
-        f.prepare_factor_split(0.0);
-        let n = f.dim();
-        let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
-            panic!("supernodal");
-        };
-        let split = f.factor_split.as_ref().expect("the tree splits");
-        let side_row = symbolic.supernode_begin()[split.sides()[0][0] as usize];
-        let top_row = n - 1;
-        assembly.fill(&values);
-        f.llt(assembly.matrix.as_ref())
-            .expect("diagonally dominant");
-        let good = f.values.clone();
-        for row in [side_row, top_row] {
-            let mut bad = values.clone();
-            let k = entries.iter().position(|&e| e == (row, row)).unwrap();
-            bad[k] = -1.0;
-            assembly.fill(&bad);
-            assert!(f.llt(assembly.matrix.as_ref()).is_err(), "row {row}");
-            assembly.fill(&values);
-            f.llt(assembly.matrix.as_ref())
-                .expect("diagonally dominant");
-            assert!(f.values == good, "row {row}");
+            let good = f.values.clone();
+            for row in rows {
+                let mut bad = values.clone();
+                let k = entries.iter().position(|&e| e == (row, row)).unwrap();
+                bad[k] = -1.0;
+                assembly.fill(&bad);
+                assert!(f.llt(assembly.matrix.as_ref()).is_err(), "row {row}");
+                assembly.fill(&values);
+                f.llt(assembly.matrix.as_ref())
+                    .expect("diagonally dominant");
+                assert!(f.values == good, "row {row}");
+            }
         }
     }
 
