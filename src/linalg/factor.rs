@@ -1099,10 +1099,22 @@ impl<T: Scalar> Assembly<T> {
             Side::Upper => b + 1,
             Side::Lower => s - b,
         };
-        // The coordinate-level pattern, column by column.
+        // The coordinate-level pattern, column by column, its length counted first (no
+        // reallocation as it grows).
+        let mut nnz = 0;
+        for c in 0..nb {
+            let s = sizes[order[c]];
+            for &r in &rows[rows_start[c]..rows_start[c + 1]] {
+                nnz += if r == c {
+                    s * (s + 1) / 2
+                } else {
+                    s * sizes[order[r]]
+                };
+            }
+        }
         let mut col_ptr = Vec::with_capacity(dim + 1);
         col_ptr.push(0usize);
-        let mut row_idx = Vec::new();
+        let mut row_idx = Vec::with_capacity(nnz);
         for c in 0..nb {
             let s = sizes[order[c]];
             for b in 0..s {
@@ -1120,6 +1132,7 @@ impl<T: Scalar> Assembly<T> {
                 col_ptr.push(row_idx.len());
             }
         }
+        debug_assert_eq!(row_idx.len(), nnz);
         // Each entry's slot, in the entries' order.
         let contributions = blocks
             .iter()
@@ -1159,7 +1172,6 @@ impl<T: Scalar> Assembly<T> {
                 }
             }
         }
-        let nnz = row_idx.len();
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
         let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
         Assembly { matrix, slots }
