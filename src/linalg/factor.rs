@@ -15,7 +15,7 @@ use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky,
@@ -505,12 +505,9 @@ impl<T: Scalar> SparseFactor<T> {
     /// least. On one core as well: the factor's values depend on the split, not on the thread
     /// count.
     pub fn prepare_factor_split(&mut self, min_work: f64) {
-        self.factor_split = match (self.symbolic.raw(), self.symbolic.perm(), self.side) {
-            (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower) => {
-                FactorSplit::new(symbolic, min_work)
-            }
-            _ => None,
-        };
+        self.factor_split = self
+            .own_factorizable()
+            .and_then(|symbolic| FactorSplit::new(symbolic, min_work));
     }
 
     /// As [`Self::prepare_factor_split`], and where the LLᴴ does not split (less work than
@@ -518,14 +515,18 @@ impl<T: Scalar> SparseFactor<T> {
     /// another ([`FactorSplit::sequential`]): its narrow supernodes by plain loops
     /// ([`crate::linalg::tree_factor`]) instead of faer's dense kernels, one call each.
     pub fn prepare_own_factorization(&mut self, min_work: f64) {
-        self.prepare_factor_split(min_work);
-        if let (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower, None) = (
-            self.symbolic.raw(),
-            self.symbolic.perm(),
-            self.side,
-            &self.factor_split,
-        ) {
-            self.factor_split = Some(FactorSplit::sequential(symbolic));
+        self.factor_split = self.own_factorizable().map(|symbolic| {
+            FactorSplit::new(symbolic, min_work)
+                .unwrap_or_else(|| FactorSplit::sequential(symbolic))
+        });
+    }
+
+    /// The analysis where [`FactorSplit`] can factor it: supernodal, in its own order (no
+    /// permutation), the lower triangle stored.
+    fn own_factorizable(&self) -> Option<&SymbolicSupernodalCholesky<usize>> {
+        match (self.symbolic.raw(), self.symbolic.perm(), self.side) {
+            (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower) => Some(symbolic),
+            _ => None,
         }
     }
 

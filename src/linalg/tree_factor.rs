@@ -146,44 +146,35 @@ impl FactorSplit {
         let begin = symbolic.supernode_begin();
         // Each supernode's updates: its pattern's rows grouped by the supernode holding them.
         let mut work = vec![0.0f64; ns];
-        let mut max_below = 0;
         for d in 0..ns {
             let k = end[d] - begin[d];
             let m = symbolic.supernode(d).pattern().len();
             work[d] = (k * k * k) as f64 / 3.0 + (k * k * m) as f64;
             for (_, below, mid) in updated(symbolic, d) {
                 work[d] += (below * mid * k) as f64;
-                max_below = max_below.max(below);
             }
         }
         let split = TreeSplit::by_weight(symbolic, &|s| work[s], min_work)?;
-        Some(Self::with_split(symbolic, split, max_below))
+        Some(Self::with_split(symbolic, split))
     }
 
     /// The factorization without a split: every supernode on one side, one after another, on
     /// one core (the same loops and kernels as a split's, in the same order within a side).
     pub fn sequential(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
-        let max_below = (0..symbolic.n_supernodes())
-            .flat_map(|d| updated(symbolic, d).map(|(_, below, _)| below))
-            .max()
-            .unwrap_or(0);
-        Self::with_split(symbolic, TreeSplit::one_side(symbolic), max_below)
+        Self::with_split(symbolic, TreeSplit::one_side(symbolic))
     }
 
-    /// The update lists and the top set's room of `split`; `max_below`: the most rows of an
-    /// update.
-    fn with_split(
-        symbolic: &SymbolicSupernodalCholesky<usize>,
-        split: TreeSplit,
-        max_below: usize,
-    ) -> Self {
+    /// The update lists, the top set's room and the workspaces' sizes for `split`.
+    fn with_split(symbolic: &SymbolicSupernodalCholesky<usize>, split: TreeSplit) -> Self {
         let ns = symbolic.n_supernodes();
         let end = symbolic.supernode_end();
         let begin = symbolic.supernode_begin();
         let mut count = vec![0usize; ns + 1];
+        let mut max_below = 0;
         for d in 0..ns {
-            for (s, _, _) in updated(symbolic, d) {
+            for (s, below, _) in updated(symbolic, d) {
                 count[s + 1] += 1;
+                max_below = max_below.max(below);
             }
         }
         for s in 0..ns {

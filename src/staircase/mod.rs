@@ -617,7 +617,7 @@ fn optimize_in(
             // falls on is the rounding's choice: M3500c's last step from a gradient of 1.3e-6
             // failed it, and the certificate's gap was 3.7e-7; kept, 1.7e-8 (ring 2.1e-9 to
             // 7.6e-11, input_INTEL 1.1e-7 to 5.4e-10).
-            if predicted >= 0.0 && trial_cost <= at.cost * (1.0 + 1e-12) {
+            if predicted >= 0.0 && no_costlier(trial_cost, at.cost) {
                 // Only the gradients' norms are compared: the current iterate's basis and
                 // gradient go first, and the trial's gradient is summed into its norm, without
                 // its coordinates (at 10⁶ poses a second whole iterate raised the peak by 54
@@ -629,7 +629,7 @@ fn optimize_in(
                 let then = 2.0
                     * TangentBasis::new(problem, &trial)
                         .coordinates_norm(&problem.half_gradient(&trial));
-                let (point, cost, lambda, gradient_norm) = if then < 0.5 * now {
+                let (point, cost, lambda, gradient_norm) = if halves(then, now) {
                     drop((x, lambda));
                     let kept = Iterate::new(problem, trial, trial_cost);
                     (kept.x, kept.cost, kept.lambda, then)
@@ -719,6 +719,18 @@ impl Iterate {
     }
 }
 
+/// Whether a step that the cost cannot judge (its change is rounding) is kept, as far as the
+/// cost goes: no higher than rounding allows ([`polish`], and Newton's last step).
+fn no_costlier(trial: f64, current: f64) -> bool {
+    trial <= current * (1.0 + 1e-12)
+}
+
+/// Whether a step's Riemannian gradient norm is less than half the current one: the rule that
+/// keeps a step the cost cannot judge ([`polish`], and Newton's last step).
+fn halves(trial: f64, current: f64) -> bool {
+    trial < 0.5 * current
+}
+
 /// Polishes a local minimum below the resolution of its cost: exact Newton steps (damping
 /// 1e-10 for the gauge direction), each kept only if it at least halves the Riemannian gradient,
 /// at most 4. Near the end the cost changes by less than its own rounding, so the stopping rule
@@ -757,7 +769,7 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
         let g_trial = problem.half_gradient(&trial);
         let basis_trial = TangentBasis::new(problem, &trial);
         let grad_trial = basis_trial.coordinates(&g_trial);
-        if !(norm(&grad_trial) < 0.5 * norm(&grad) && cost <= local.cost * (1.0 + 1e-12)) {
+        if !(halves(norm(&grad_trial), norm(&grad)) && no_costlier(cost, local.cost)) {
             break;
         }
         chord = norm(&grad_trial) <= 1e-3 * norm(&grad);
