@@ -765,14 +765,19 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
         // (H + μD)δ = −2Bᵀg: the Riemannian gradient is twice the half gradient's coordinates.
         let delta = system.solve(|k| -2.0 * grad[k]);
         let trial = basis.retract(&local.point, &delta, problem.positions());
+        // The step, the basis and the gradient of the point left go before the trial's are
+        // built (the gradient's norm kept): at 10⁶ poses the polish's trial holds the process's
+        // peak of memory, 2040-2064 MiB so against 2064-2095 MiB (8 and 6 runs).
+        let now = norm(&grad);
+        drop((delta, basis, grad));
         let cost = problem.cost(&trial);
         let g_trial = problem.half_gradient(&trial);
         let basis_trial = TangentBasis::new(problem, &trial);
         let grad_trial = basis_trial.coordinates(&g_trial);
-        if !(halves(norm(&grad_trial), norm(&grad)) && no_costlier(cost, local.cost)) {
+        if !(halves(norm(&grad_trial), now) && no_costlier(cost, local.cost)) {
             break;
         }
-        chord = norm(&grad_trial) <= 1e-3 * norm(&grad);
+        chord = norm(&grad_trial) <= 1e-3 * now;
         local = Local {
             lambda: problem.multipliers(&trial, &g_trial),
             point: trial,
