@@ -772,8 +772,8 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
         let trial = basis.retract(&local.point, &delta, problem.positions());
         // The step, the basis and the gradient of the point left go before the trial's are
         // built (the gradient's norm kept): at 10⁶ poses the polish's trial holds the process's
-        // peak of memory, a median of 2063 MiB so against 2084 MiB (13 and 12 runs, 2039-2102
-        // against 2064-2095).
+        // peak of memory, a median of 2015 MiB so against 2038 MiB (20 and 13 runs, 1992-2053
+        // against 2015-2046).
         let now = norm(&grad);
         drop((delta, basis, grad));
         let cost = problem.cost(&trial);
