@@ -780,15 +780,16 @@ fn polish_in(problem: &Problem, local: Local, system: &mut Option<NewtonSystem>)
         let g_trial = problem.half_gradient(&trial);
         let basis_trial = TangentBasis::new(problem, &trial);
         let grad_trial = basis_trial.coordinates(&g_trial);
-        if !(halves(norm(&grad_trial), now) && no_costlier(cost, local.cost)) {
+        let next = norm(&grad_trial);
+        if !(halves(next, now) && no_costlier(cost, local.cost)) {
             break;
         }
-        chord = norm(&grad_trial) <= 1e-3 * now;
+        chord = next <= 1e-3 * now;
         local = Local {
             lambda: problem.multipliers(&trial, &g_trial),
             point: trial,
             cost,
-            gradient_norm: 2.0 * norm(&grad_trial),
+            gradient_norm: 2.0 * next,
             iterations: local.iterations + 1,
             ..local
         };
