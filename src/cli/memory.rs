@@ -54,7 +54,8 @@ const RELEASE_FROM_KIB: i64 = 16 << 10;
 /// whole process against the exit's unmapping (41 interleaved pairs): cityTrees10000 0.97,
 /// city10000 0.98, M3500 0.93, manhattan 0.97, victoriaPark 0.99, ais2klinik 1.01.
 pub fn release_beside<R>(work: impl FnOnce() -> R) -> R {
-    if !crate::linalg::parallel::second_core() || peak_resident_kib() < RELEASE_FROM_KIB {
+    // The peak first: one system call, where the cores' count may read the cgroup's files.
+    if peak_resident_kib() < RELEASE_FROM_KIB || !crate::linalg::parallel::second_core() {
         return work();
     }
     crate::linalg::parallel::join(work, crate::linalg::heap::release_free_memory).0

@@ -458,7 +458,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         (Some(format), None)
             if shared.noise == NoiseKind::Information
                 && read_report.vertigo.is_none()
-                && shared.edges.len() + shared.landmarks.observations.len() <= LINES_AHEAD_MAX =>
+                && (crate::linalg::parallel::SHARED_FROM_EDGES..=LINES_AHEAD_MAX)
+                    .contains(&(shared.edges.len() + shared.landmarks.observations.len())) =>
         {
             let graph = std::sync::Arc::clone(&shared);
             let options = WriteOptions {

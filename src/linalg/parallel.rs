@@ -8,11 +8,45 @@
 
 use std::sync::OnceLock;
 
-/// Whether a second thread can run beside this one: more than one CPU available to the process
-/// (its affinity and cgroup quota included), asked once.
-pub fn second_core() -> bool {
+/// Whether the process has more than one CPU (its affinity and cgroup quota included), asked
+/// once.
+fn more_than_one_cpu() -> bool {
     static SECOND: OnceLock<bool> = OnceLock::new();
     *SECOND.get_or_init(|| std::thread::available_parallelism().is_ok_and(|c| c.get() > 1))
+}
+
+std::thread_local! {
+    /// Whether this thread runs the tasks it gives itself ([`alone`]).
+    static ALONE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether a second thread can run beside this one: more than one CPU available to the process,
+/// and this thread not told to work [`alone`].
+pub fn second_core() -> bool {
+    !ALONE.with(std::cell::Cell::get) && more_than_one_cpu()
+}
+
+/// Graphs of fewer edges are solved on one thread ([`alone`]): their whole solve costs less than
+/// handing work to the second core does (its thread's start, std's reading of the cgroup quota,
+/// a wake-up per task). Whole process, alone against two cores: tinyGrid3D (11 edges) 0.90
+/// (41 interleaved pairs); generated planar graphs of 21 and 38 edges 0.96-0.99; 3D worlds of
+/// 53-111 edges the same time either way, within the spread; smallGrid3D (297 edges) takes
+/// 0.9 of its one-core time with two.
+pub const SHARED_FROM_EDGES: usize = 50;
+
+/// `work()` with every task it gives ([`join`], [`ahead`], [`halves`], [`when_idle`]) run on
+/// this thread, as on one core: the same bits (module docs), none of the second core's costs.
+/// For a computation too small to share ([`SHARED_FROM_EDGES`]).
+pub fn alone<R>(work: impl FnOnce() -> R) -> R {
+    /// Restores the thread's setting, also while unwinding.
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            ALONE.with(|a| a.set(self.0));
+        }
+    }
+    let _restore = Restore(ALONE.with(|a| a.replace(true)));
+    work()
 }
 
 /// The tasks that [`ahead`] is running on the second core now.
@@ -130,8 +164,11 @@ fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// not the thread, and gives its tasks threads of their own.
 fn worker() -> Option<&'static Worker> {
     static WORKER: OnceLock<Option<(u32, &'static Worker)>> = OnceLock::new();
+    if !second_core() {
+        return None;
+    }
     let (process, worker) = (*WORKER.get_or_init(|| {
-        if !second_core() {
+        if !more_than_one_cpu() {
             return None;
         }
         let worker: &'static Worker = Box::leak(Box::new(Worker {
@@ -664,6 +701,39 @@ mod tests {
             let all: Vec<usize> = lower.into_iter().chain(upper).collect();
             assert_eq!(all, (0..n).collect::<Vec<_>>());
         }
+    }
+
+    /// Inside [`alone`] every task runs on the calling thread and no second core is seen; the
+    /// thread's setting comes back after it, also after a panic inside.
+    #[test]
+    fn alone_keeps_every_task_on_this_thread() {
+        let here = std::thread::current().id();
+        let ((a, b), second) = alone(|| {
+            (
+                join(
+                    || std::thread::current().id(),
+                    || std::thread::current().id(),
+                ),
+                second_core(),
+            )
+        });
+        assert_eq!((a, b), (here, here));
+        assert!(!second);
+        let ((), ran_on) = alone(|| {
+            ahead(
+                || (),
+                || (),
+                || std::thread::current().id(),
+                |ready, _| assert_eq!(ready.take(), None),
+            )
+        });
+        assert_eq!(ran_on, here);
+        let unwound = std::panic::catch_unwind(|| alone(|| panic!("inside alone")));
+        assert!(unwound.is_err());
+        assert_eq!(
+            second_core(),
+            std::thread::available_parallelism().is_ok_and(|c| c.get() > 1)
+        );
     }
 
     /// A panic on the second thread reaches the caller.

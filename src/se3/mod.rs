@@ -166,6 +166,22 @@ pub fn solve_graph3_from(
     options: &Options3,
     report: &mut dyn FnMut(Step3),
 ) -> Solution3 {
+    let mut solve = || solve_problem(graph, weights, start, options, report);
+    if graph.edges.len() < crate::linalg::parallel::SHARED_FROM_EDGES {
+        crate::linalg::parallel::alone(solve)
+    } else {
+        solve()
+    }
+}
+
+/// [`solve_graph3_from`]'s work, on one core or two.
+fn solve_problem(
+    graph: &Graph3,
+    weights: &[Weight3],
+    start: Option<&[Rt]>,
+    options: &Options3,
+    report: &mut dyn FnMut(Step3),
+) -> Solution3 {
     let problem = Problem3::new(graph, weights, anchor_of(graph));
     let local = LocalOptions {
         max_iterations: options.max_iterations,

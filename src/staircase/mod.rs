@@ -317,6 +317,23 @@ pub fn solve_anchored_from(
     start: Option<&[Pose2]>,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Anchored)> {
+    let terms = graph.edges.len() + graph.landmarks.observations.len();
+    let mut solve = || solve_anchored_here(graph, weights, options, start, observer);
+    if terms < crate::linalg::parallel::SHARED_FROM_EDGES {
+        crate::linalg::parallel::alone(solve)
+    } else {
+        solve()
+    }
+}
+
+/// [`solve_anchored_from`]'s work, on one core or two.
+fn solve_anchored_here(
+    graph: &PoseGraph,
+    weights: &[EdgeWeight],
+    options: &StaircaseOptions,
+    start: Option<&[Pose2]>,
+    observer: &mut dyn FnMut(&Iteration),
+) -> Option<(StaircaseSolution, Anchored)> {
     // The anchor: the pose nearest the centre of the input's own estimate (the file's vertices,
     // or its spanning-tree composition for edges-only files), so the problem is built once; the
     // same with a warm start, so that warm and cold starts solve the same problem.
@@ -806,8 +823,15 @@ pub fn solve_from(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> StaircaseSolution {
-    solve_from_start(problem, || Some(start), options, observer)
-        .expect("a given start is always there")
+    let solve = || {
+        solve_from_start(problem, || Some(start), options, observer)
+            .expect("a given start is always there")
+    };
+    if problem.terms.len() < crate::linalg::parallel::SHARED_FROM_EDGES {
+        crate::linalg::parallel::alone(solve)
+    } else {
+        solve()
+    }
 }
 
 /// As [`solve_from`], from the rank-1 point that `start` computes (the chordal initialization) on
