@@ -22,7 +22,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
-use faer::{Conj, MatMut, Par, Side, c64};
+use faer::{Conj, Index, MatMut, Par, Side, c64};
 
 /// A numeric factorization broke down: a pivot that is not positive (LLᴴ) or zero (LDLᴴ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,9 +76,12 @@ enum State {
 }
 
 /// A sparse Hermitian matrix's symbolic Cholesky analysis (AMD ordering) with room for numeric
-/// LLᴴ or LDLᴴ factors of any matrix with the same pattern (upper triangle stored).
-pub struct SparseFactor<T> {
-    symbolic: SymbolicCholesky<usize>,
+/// LLᴴ or LDLᴴ factors of any matrix with the same pattern (upper triangle stored). Its row
+/// indices and positions are of type `I`: `usize`, or `u32` where the counts fit
+/// ([`SparseFactor::try_analyze_in_order`]), which halves the analysis's index arrays (the
+/// planar Newton systems'); the values are the same bits either way.
+pub struct SparseFactor<T, I: Index = usize> {
+    symbolic: SymbolicCholesky<I>,
     /// The triangle of the matrices passed to the numeric factorizations.
     side: Side,
     values: Vec<T>,
@@ -125,35 +128,6 @@ impl<T: Scalar> SparseFactor<T> {
         Self::analyze_with_order(pattern, layout.threshold(), Some(order))
     }
 
-    /// As [`Self::analyze`] for a matrix already in elimination order (no fill-reducing
-    /// permutation) whose `side` triangle is stored, such as an [`Assembly::permuted`]. When
-    /// `side` is the triangle faer's numeric kernels read ([`Layout::stored_side`]), each
-    /// factorization reads the matrix as it is: faer otherwise copies it into the permuted order
-    /// on every factorization (9% of a Newton solve's time on M3500c).
-    pub fn analyze_in_order(
-        pattern: SymbolicSparseColMatRef<'_, usize>,
-        side: Side,
-        layout: Layout,
-    ) -> Self {
-        // faer's symbolic analysis in the identity order reads the pattern as an upper triangle
-        // whatever side it is told (faer 0.24), so a lower one is transposed for it.
-        let upper;
-        let pattern = match side {
-            Side::Upper => pattern,
-            Side::Lower => {
-                upper = pattern
-                    .transpose()
-                    .to_col_major()
-                    .expect("transposing a pattern cannot fail but for memory");
-                upper.as_ref()
-            }
-        };
-        let mut factor =
-            Self::analyze_full(pattern, layout.threshold(), SymmetricOrdering::Identity);
-        factor.side = side;
-        factor
-    }
-
     fn analyze_with(
         pattern: SymbolicSparseColMatRef<'_, usize>,
         threshold: SupernodalThreshold,
@@ -182,12 +156,62 @@ impl<T: Scalar> SparseFactor<T> {
         Self::analyze_full(pattern, threshold, ordering)
     }
 
+    /// As [`Self::analyze`] for a matrix already in elimination order (no fill-reducing
+    /// permutation) whose `side` triangle is stored, such as an [`Assembly::permuted`]. When
+    /// `side` is the triangle faer's numeric kernels read ([`Layout::stored_side`]), each
+    /// factorization reads the matrix as it is: faer otherwise copies it into the permuted order
+    /// on every factorization (9% of a Newton solve's time on M3500c).
+    pub fn analyze_in_order(
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+        side: Side,
+        layout: Layout,
+    ) -> Self {
+        Self::try_analyze_in_order(pattern, side, layout)
+            .expect("the symbolic analysis of a square pattern cannot fail but for memory")
+    }
+
     /// The analysis of an upper triangle's pattern.
     fn analyze_full(
         pattern: SymbolicSparseColMatRef<'_, usize>,
         threshold: SupernodalThreshold,
         ordering: SymmetricOrdering<'_, usize>,
     ) -> Self {
+        Self::try_analyze_full(pattern, threshold, ordering)
+            .expect("the symbolic analysis of a square pattern cannot fail but for memory")
+    }
+}
+
+impl<T: Scalar, I: Index> SparseFactor<T, I> {
+    /// [`SparseFactor::analyze_in_order`] with indices of type `I`: `None` where the factor's
+    /// entries do not fit in it (faer's count overflows; below 2³¹ for `u32`).
+    pub fn try_analyze_in_order(
+        pattern: SymbolicSparseColMatRef<'_, I>,
+        side: Side,
+        layout: Layout,
+    ) -> Option<Self> {
+        // faer's symbolic analysis in the identity order reads the pattern as an upper triangle
+        // whatever side it is told (faer 0.24), so a lower one is transposed for it.
+        let upper;
+        let pattern = match side {
+            Side::Upper => pattern,
+            Side::Lower => {
+                upper = pattern.transpose().to_col_major().ok()?;
+                upper.as_ref()
+            }
+        };
+        let mut factor =
+            Self::try_analyze_full(pattern, layout.threshold(), SymmetricOrdering::Identity)?;
+        factor.side = side;
+        Some(factor)
+    }
+
+    /// The analysis of an upper triangle's pattern; `None` where faer's counts overflow `I`
+    /// (or memory runs out).
+    fn try_analyze_full(
+        pattern: SymbolicSparseColMatRef<'_, I>,
+        threshold: SupernodalThreshold,
+        ordering: SymmetricOrdering<'_, I>,
+    ) -> Option<Self> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: threshold,
             supernodal_params: faer::sparse::linalg::SymbolicSupernodalParams {
@@ -195,9 +219,8 @@ impl<T: Scalar> SparseFactor<T> {
             },
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_cholesky(pattern, Side::Upper, ordering, params)
-            .expect("the symbolic analysis of a square pattern cannot fail but for memory");
-        SparseFactor {
+        let symbolic = factorize_symbolic_cholesky(pattern, Side::Upper, ordering, params).ok()?;
+        Some(SparseFactor {
             symbolic,
             side: Side::Upper,
             values: Vec::new(),
@@ -209,7 +232,7 @@ impl<T: Scalar> SparseFactor<T> {
             split: None,
             factor_split: None,
             split_room: SplitRoom::default(),
-        }
+        })
     }
 
     /// The workspace of the factorizations and of one-column solves.
@@ -320,7 +343,7 @@ impl<T: Scalar> SparseFactor<T> {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let cp = s.col_ptr();
                 (0..self.dim())
-                    .map(|j| ((cp[j + 1] - cp[j]) as f64).powi(2))
+                    .map(|j| ((cp[j + 1].zx() - cp[j].zx()) as f64).powi(2))
                     .sum()
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
@@ -331,8 +354,8 @@ impl<T: Scalar> SparseFactor<T> {
                 );
                 (0..s.n_supernodes())
                     .map(|t| {
-                        let k = (end[t] - begin[t]) as f64;
-                        let m = (rows[t + 1] - rows[t]) as f64;
+                        let k = (end[t].zx() - begin[t].zx()) as f64;
+                        let m = (rows[t + 1].zx() - rows[t].zx()) as f64;
                         k * k * k / 3.0 + k * k * m + k * m * m
                     })
                     .sum()
@@ -347,7 +370,7 @@ impl<T: Scalar> SparseFactor<T> {
 
     /// Numeric LLᴴ of `a` (upper triangle, same pattern as analyzed). `Err` if a pivot is not
     /// positive (the matrix is not numerically positive definite).
-    pub fn llt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
+    pub fn llt(&mut self, a: SparseColMatRef<'_, I, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
         if !self.allocated {
@@ -381,7 +404,7 @@ impl<T: Scalar> SparseFactor<T> {
     /// cores where the second is idle, else one after the other: the same values.
     fn factor_split_with(
         &mut self,
-        a: SparseColMatRef<'_, usize, T>,
+        a: SparseColMatRef<'_, I, T>,
         kind: Kind,
     ) -> Option<Result<(), NotFactorable>> {
         let (SymbolicCholeskyRaw::Supernodal(symbolic), Some(split)) =
@@ -412,7 +435,7 @@ impl<T: Scalar> SparseFactor<T> {
 
     /// Numeric LDLᴴ of `a` without pivoting (upper triangle, same pattern). `Err` on an exactly
     /// zero pivot.
-    pub fn ldlt(&mut self, a: SparseColMatRef<'_, usize, T>) -> Result<(), NotFactorable> {
+    pub fn ldlt(&mut self, a: SparseColMatRef<'_, I, T>) -> Result<(), NotFactorable> {
         clear_upper_avx();
         self.state = State::None;
         if !self.allocated {
@@ -522,10 +545,15 @@ impl<T: Scalar> SparseFactor<T> {
     }
 
     /// The analysis where [`FactorSplit`] can factor it: supernodal, in its own order (no
-    /// permutation), the lower triangle stored.
-    fn own_factorizable(&self) -> Option<&SymbolicSupernodalCholesky<usize>> {
+    /// permutation), the lower triangle stored, fewer rows than its 32-bit row map holds
+    /// ([`crate::linalg::tree_factor::LOCAL_NONE`]).
+    fn own_factorizable(&self) -> Option<&SymbolicSupernodalCholesky<I>> {
         match (self.symbolic.raw(), self.symbolic.perm(), self.side) {
-            (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower) => Some(symbolic),
+            (SymbolicCholeskyRaw::Supernodal(symbolic), None, Side::Lower)
+                if self.dim() < crate::linalg::tree_factor::LOCAL_NONE as usize =>
+            {
+                Some(symbolic)
+            }
             _ => None,
         }
     }
@@ -563,11 +591,12 @@ impl<T: Scalar> SparseFactor<T> {
         match self.symbolic.perm() {
             Some(perm) => {
                 let (fwd, inv) = perm.arrays();
-                let mut x = faer::Mat::<T>::from_fn(b.nrows(), b.ncols(), |i, j| b[(fwd[i], j)]);
+                let mut x =
+                    faer::Mat::<T>::from_fn(b.nrows(), b.ncols(), |i, j| b[(fwd[i].zx(), j)]);
                 solve(x.as_mut());
                 for j in 0..b.ncols() {
                     for (i, &new) in inv.iter().enumerate() {
-                        b[(i, j)] = x[(new, j)];
+                        b[(i, j)] = x[(new.zx(), j)];
                     }
                 }
             }
@@ -606,7 +635,9 @@ impl<T: Scalar> SparseFactor<T> {
             State::None => panic!("solve without a successful factorization"),
         }
     }
+}
 
+impl<T: Scalar> SparseFactor<T> {
     /// The pivots d_k of the last LDLᴴ (real parts), in the factorization's (permuted) order.
     pub fn ldlt_pivots(&self) -> Vec<f64> {
         let mut d = vec![0.0; self.dim()];
@@ -889,12 +920,18 @@ impl Scalar for c64 {
     }
 }
 
+/// Whether `n` fits in the index type `I` as faer reads it (signed: below 2³¹ for `u32`).
+fn fits<I: Index>(n: usize) -> bool {
+    usize::BITS - n.leading_zeros() < I::BITS
+}
+
 /// A triangular sparse matrix (the upper triangle of a Hermitian one, or of a permutation of it:
 /// [`Assembly::permuted`]) with a fixed pattern whose values are rebuilt by scatter-adding
-/// contributions into precomputed slots (O(nnz) per assembly, no sorting).
-pub struct Assembly<T> {
+/// contributions into precomputed slots (O(nnz) per assembly, no sorting). Its pattern's indices
+/// are of type `I`, as its [`SparseFactor`]'s ([`Assembly::try_blocked`] builds `u32` ones).
+pub struct Assembly<T, I: Index = usize> {
     /// The matrix (upper triangle), values rewritten by [`Assembly::fill`].
-    pub matrix: SparseColMat<usize, T>,
+    pub matrix: SparseColMat<I, T>,
     slots: Slots,
 }
 
@@ -1008,6 +1045,49 @@ impl<T: Scalar> Assembly<T> {
         Self::from_entries(dim, entries)
     }
 
+    /// [`Assembly::try_blocked`] with `usize` indices, which hold any count.
+    pub fn blocked(
+        sizes: &[usize],
+        blocks: &[(usize, usize)],
+        order: &[usize],
+        side: Side,
+    ) -> Self {
+        Self::try_blocked(sizes, blocks, order, side).expect("usize indices hold any count")
+    }
+
+    /// The compressed-column pattern of `entries` (duplicates merged, rows sorted) by a
+    /// counting sort on the columns ([`column_buckets`]), O(nnz + dim), and each entry's slot in
+    /// it. Hand-written: faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve
+    /// 3-5% faster on M3500, intel and city10000 (medians of 21 interleaved runs). (W̃ itself,
+    /// whose values are summed once, is built by the same bucketing in
+    /// `problem::matrix`'s `Terms`.)
+    fn from_entries(dim: usize, entries: Vec<(usize, usize)>) -> Self {
+        let (start, order) = column_buckets(dim, entries.iter().map(|&(_, c)| c));
+        // (row, entry index) bucketed by column, then sorted within each column.
+        let mut by_column: Vec<(usize, usize)> = order.iter().map(|&k| (entries[k].0, k)).collect();
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        let mut row_idx = Vec::with_capacity(entries.len());
+        let mut slots = Slots::zeroed(entries.len(), entries.len());
+        col_ptr.push(0);
+        for c in 0..dim {
+            let bucket = &mut by_column[start[c]..start[c + 1]];
+            bucket.sort_unstable();
+            for &(r, k) in bucket.iter() {
+                if row_idx.len() == col_ptr[c] || row_idx.last() != Some(&r) {
+                    row_idx.push(r);
+                }
+                slots.set(k, row_idx.len() - 1);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let nnz = row_idx.len();
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
+        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
+        Assembly { matrix, slots }
+    }
+}
+
+impl<T: Scalar, I: Index> Assembly<T, I> {
     /// [`Assembly::permuted`] for a matrix of dense blocks: block u spans `sizes[u]` coordinates
     /// (consecutive, blocks in index order), `blocks` lists the pairs (u, v), u ≤ v, whose block
     /// is in the pattern (duplicates allowed), and `order` orders the blocks (`order[new] = old`;
@@ -1018,13 +1098,15 @@ impl<T: Scalar> Assembly<T> {
     /// The same pattern and slots as [`Assembly::permuted`] given every entry and the expanded
     /// order, built from the blocks: one sort of the pairs instead of one of the entries (6×6
     /// blocks in 3D, 21 to 36 entries each). At 10⁶ planar poses the entrywise sort took 2.3 s.
-    /// Real symmetric matrices only, as [`Assembly::permuted`].
-    pub fn blocked(
+    /// Real symmetric matrices only, as [`Assembly::permuted`]. `None` where the pattern's
+    /// entries do not fit in the index type `I` (faer's indices are signed: below 2³¹ for
+    /// `u32`).
+    pub fn try_blocked(
         sizes: &[usize],
         blocks: &[(usize, usize)],
         order: &[usize],
         side: Side,
-    ) -> Self {
+    ) -> Option<Self> {
         assert!(
             T::IS_REAL,
             "Assembly::blocked: real symmetric matrices only"
@@ -1113,9 +1195,12 @@ impl<T: Scalar> Assembly<T> {
                 };
             }
         }
-        let mut col_ptr = Vec::with_capacity(dim + 1);
-        col_ptr.push(0usize);
-        let mut row_idx = Vec::with_capacity(nnz);
+        if !fits::<I>(nnz) || !fits::<I>(dim) {
+            return None;
+        }
+        let mut col_ptr: Vec<I> = Vec::with_capacity(dim + 1);
+        col_ptr.push(I::truncate(0));
+        let mut row_idx: Vec<I> = Vec::with_capacity(nnz);
         for c in 0..nb {
             let s = sizes[order[c]];
             for b in 0..s {
@@ -1125,12 +1210,14 @@ impl<T: Scalar> Assembly<T> {
                             Side::Upper => 0,
                             Side::Lower => b,
                         };
-                        row_idx.extend((from..from + diagonal_rows(s, b)).map(|a| first[c] + a));
+                        row_idx.extend(
+                            (from..from + diagonal_rows(s, b)).map(|a| I::truncate(first[c] + a)),
+                        );
                     } else {
-                        row_idx.extend(first[r]..first[r + 1]);
+                        row_idx.extend((first[r]..first[r + 1]).map(I::truncate));
                     }
                 }
-                col_ptr.push(row_idx.len());
+                col_ptr.push(I::truncate(row_idx.len()));
             }
         }
         debug_assert_eq!(row_idx.len(), nnz);
@@ -1161,7 +1248,7 @@ impl<T: Scalar> Assembly<T> {
                         _ if position[u] == r => (a, b),
                         _ => (b, a),
                     };
-                    let mut at = col_ptr[first[c] + j] + above[k];
+                    let mut at = col_ptr[first[c] + j].zx() + above[k];
                     if diagonal_before[k] {
                         at += diagonal_rows(sizes[order[c]], j);
                     }
@@ -1175,38 +1262,7 @@ impl<T: Scalar> Assembly<T> {
         }
         let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
         let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
-        Assembly { matrix, slots }
-    }
-
-    /// The compressed-column pattern of `entries` (duplicates merged, rows sorted) by a
-    /// counting sort on the columns ([`column_buckets`]), O(nnz + dim), and each entry's slot in
-    /// it. Hand-written: faer's `try_new_from_triplets` sorts all triplets; this made pgo-solve
-    /// 3-5% faster on M3500, intel and city10000 (medians of 21 interleaved runs). (W̃ itself,
-    /// whose values are summed once, is built by the same bucketing in
-    /// `problem::matrix`'s `Terms`.)
-    fn from_entries(dim: usize, entries: Vec<(usize, usize)>) -> Self {
-        let (start, order) = column_buckets(dim, entries.iter().map(|&(_, c)| c));
-        // (row, entry index) bucketed by column, then sorted within each column.
-        let mut by_column: Vec<(usize, usize)> = order.iter().map(|&k| (entries[k].0, k)).collect();
-        let mut col_ptr = Vec::with_capacity(dim + 1);
-        let mut row_idx = Vec::with_capacity(entries.len());
-        let mut slots = Slots::zeroed(entries.len(), entries.len());
-        col_ptr.push(0);
-        for c in 0..dim {
-            let bucket = &mut by_column[start[c]..start[c + 1]];
-            bucket.sort_unstable();
-            for &(r, k) in bucket.iter() {
-                if row_idx.len() == col_ptr[c] || row_idx.last() != Some(&r) {
-                    row_idx.push(r);
-                }
-                slots.set(k, row_idx.len() - 1);
-            }
-            col_ptr.push(row_idx.len());
-        }
-        let nnz = row_idx.len();
-        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
-        let matrix = SparseColMat::new(symbolic, vec![T::zero_impl(); nnz]);
-        Assembly { matrix, slots }
+        Some(Assembly { matrix, slots })
     }
 
     /// Rewrites the values: entry k of the pattern receives `values[k]` (summed over duplicates).
@@ -2374,6 +2430,85 @@ mod tests {
                 assert_eq!(p.row_idx(), q.row_idx(), "trial {trial} {side:?}");
                 assert_eq!(by_entry.slots, by_block.slots, "trial {trial} {side:?}");
             }
+        }
+    }
+
+    /// 32-bit indices change nothing but the indices' width: a grid's blocked system (3×3 blocks)
+    /// assembled, analyzed and factored with `u32` and with `usize` indices gives the same
+    /// pattern, the same factor and the same solution to the bit, by our own factorization (split
+    /// between two sides, and on one) and by faer's. And [`fits`] draws the line where faer's
+    /// signed 32-bit indices end, 2³¹ − 1.
+    #[test]
+    fn narrow_indices_factor_to_the_same_bits() {
+        assert!(fits::<u32>((1 << 31) - 1));
+        assert!(!fits::<u32>(1 << 31));
+        assert!(fits::<usize>(1 << 40));
+        let edges = grid_edges(30, 24, 1);
+        let nb = 30 * 24;
+        let sizes = vec![3usize; nb];
+        let mut blocks: Vec<(usize, usize)> = (0..nb).map(|u| (u, u)).collect();
+        blocks.extend(edges.iter().map(|&(u, v)| (u.min(v), u.max(v))));
+        // A fill-reducing order (`order[new] = old`), whose elimination tree divides.
+        let rank = pose_rank(nb, edges.iter().copied(), 1.0);
+        let mut order = vec![0; nb];
+        for (u, &r) in rank.iter().enumerate() {
+            order[r] = u;
+        }
+        let mut rng = crate::linalg::rng::Rng::new(5);
+        let mut values = Vec::new();
+        for &(u, v) in &blocks {
+            for a in 0..3 {
+                for b in 0..3 {
+                    if u == v && b < a {
+                        continue;
+                    }
+                    values.push(if u == v && a == b {
+                        30.0
+                    } else {
+                        (rng.next_u64() % 2001) as f64 / 1000.0 - 1.0
+                    });
+                }
+            }
+        }
+        let b: Vec<f64> = (0..3 * nb).map(|k| (k as f64 * 0.37).sin()).collect();
+        let layout = Layout::Supernodal;
+        let side = layout.stored_side();
+        for own in [None, Some(0.0), Some(f64::INFINITY)] {
+            let mut wide = Assembly::<f64>::blocked(&sizes, &blocks, &order, side);
+            let mut narrow =
+                Assembly::<f64, u32>::try_blocked(&sizes, &blocks, &order, side).unwrap();
+            wide.fill(&values);
+            narrow.fill(&values);
+            let (w, n) = (wide.matrix.symbolic(), narrow.matrix.symbolic());
+            assert!(
+                w.col_ptr()
+                    .iter()
+                    .zip(n.col_ptr())
+                    .all(|(a, b)| *a == *b as usize)
+            );
+            assert!(
+                w.row_idx()
+                    .iter()
+                    .zip(n.row_idx())
+                    .all(|(a, b)| *a == *b as usize)
+            );
+            let mut fw = SparseFactor::analyze_in_order(w, side, layout);
+            let mut fn_ = SparseFactor::<f64, u32>::try_analyze_in_order(n, side, layout).unwrap();
+            if let Some(min_work) = own {
+                fw.prepare_own_factorization(min_work);
+                fn_.prepare_own_factorization(min_work);
+                assert_eq!(fw.splits_factorizations(), fn_.splits_factorizations());
+                assert_eq!(fn_.splits_factorizations(), min_work == 0.0);
+            }
+            assert_eq!(fw.multiply_adds(), fn_.multiply_adds());
+            fw.llt(wide.matrix.as_ref()).unwrap();
+            fn_.llt(narrow.matrix.as_ref()).unwrap();
+            let (mut xw, mut xn) = (b.clone(), b.clone());
+            fw.solve_in_place(&mut xw);
+            fn_.solve_in_place(&mut xn);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&xw), bits(&xn), "{own:?}");
+            assert_eq!(bits(&fw.take_values()), bits(&fn_.take_values()), "{own:?}");
         }
     }
 

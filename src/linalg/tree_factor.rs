@@ -50,7 +50,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::traits::math_utils::{conj, from_real, mul_real, real, recip, sqrt};
-use faer::{Accum, Conj, MatMut, MatRef, Par, Spec};
+use faer::{Accum, Conj, Index, MatMut, MatRef, Par, Spec};
 
 /// The scalars of the factorization: those of the split solve.
 pub use super::tree_solve::Entry;
@@ -140,14 +140,14 @@ impl FactorSplit {
     /// The split of `symbolic`'s factorization balanced by each supernode's multiply-adds (its
     /// own block's k³/3 + k²m and its updates of its ancestors); `None` where they total less
     /// than `min_work`, or where the tree does not split ([`TreeSplit::by_weight`]).
-    pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>, min_work: f64) -> Option<Self> {
+    pub fn new<I: Index>(symbolic: &SymbolicSupernodalCholesky<I>, min_work: f64) -> Option<Self> {
         let ns = symbolic.n_supernodes();
         let end = symbolic.supernode_end();
         let begin = symbolic.supernode_begin();
         // Each supernode's updates: its pattern's rows grouped by the supernode holding them.
         let mut work = vec![0.0f64; ns];
         for d in 0..ns {
-            let k = end[d] - begin[d];
+            let k = end[d].zx() - begin[d].zx();
             let m = symbolic.supernode(d).pattern().len();
             work[d] = (k * k * k) as f64 / 3.0 + (k * k * m) as f64;
             for (_, below, mid) in updated(symbolic, d) {
@@ -160,12 +160,12 @@ impl FactorSplit {
 
     /// The factorization without a split: every supernode on one side, one after another, on
     /// one core (the same loops and kernels as a split's, in the same order within a side).
-    pub fn sequential(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
+    pub fn sequential<I: Index>(symbolic: &SymbolicSupernodalCholesky<I>) -> Self {
         Self::with_split(symbolic, TreeSplit::one_side(symbolic))
     }
 
     /// The update lists, the top set's room and the workspaces' sizes for `split`.
-    fn with_split(symbolic: &SymbolicSupernodalCholesky<usize>, split: TreeSplit) -> Self {
+    fn with_split<I: Index>(symbolic: &SymbolicSupernodalCholesky<I>, split: TreeSplit) -> Self {
         let ns = symbolic.n_supernodes();
         let end = symbolic.supernode_end();
         let begin = symbolic.supernode_begin();
@@ -196,11 +196,14 @@ impl FactorSplit {
         let mut offset = vec![0usize];
         for &s in &top {
             let s = s as usize;
-            let k = end[s] - begin[s];
+            let k = end[s].zx() - begin[s].zx();
             let rows = k + symbolic.supernode(s).pattern().len();
             offset.push(offset.last().unwrap() + rows * k);
         }
-        let max_cols = (0..ns).map(|s| end[s] - begin[s]).max().unwrap_or(0);
+        let max_cols = (0..ns)
+            .map(|s| end[s].zx() - begin[s].zx())
+            .max()
+            .unwrap_or(0);
         FactorSplit {
             split,
             start,
@@ -239,12 +242,12 @@ impl FactorSplit {
     /// its supernode's diagonal, L's entries below it; `Err` on a zero pivot). The sides run
     /// side by side where `two_cores`, else one after the other; the values are the same either
     /// way.
-    pub fn factorize<T: Entry>(
+    pub fn factorize<T: Entry, I: Index>(
         &self,
         kind: Kind,
-        symbolic: &SymbolicSupernodalCholesky<usize>,
+        symbolic: &SymbolicSupernodalCholesky<I>,
         values: &mut [T],
-        a_lower: SparseColMatRef<'_, usize, T>,
+        a_lower: SparseColMatRef<'_, I, T>,
         room: &mut SplitRoom<T>,
         two_cores: bool,
     ) -> Result<(), FailedPivot> {
@@ -316,17 +319,17 @@ impl FactorSplit {
 
 /// The supernodes that supernode d updates, ascending, each as (s, below, mid): its pattern's
 /// rows from s's first column on (`below`), of which `mid` are s's columns.
-fn updated(
-    symbolic: &SymbolicSupernodalCholesky<usize>,
+fn updated<I: Index>(
+    symbolic: &SymbolicSupernodalCholesky<I>,
     d: usize,
 ) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
     let end = symbolic.supernode_end();
     let pattern = symbolic.supernode(d).pattern();
     let mut i = 0;
     std::iter::from_fn(move || {
-        let &row = pattern.get(i)?;
-        let s = end.partition_point(|&e| e <= row);
-        let mid = pattern[i..].partition_point(|&r| r < end[s]);
+        let row = pattern.get(i)?.zx();
+        let s = end.partition_point(|e| e.zx() <= row);
+        let mid = pattern[i..].partition_point(|r| r.zx() < end[s].zx());
         let below = pattern.len() - i;
         i += mid;
         Some((s, below, mid))
@@ -343,10 +346,14 @@ impl<T> Shared<T> {
     /// # Safety
     /// Not read or written by another thread meanwhile.
     #[allow(clippy::mut_from_ref)]
-    unsafe fn block(&self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) -> &mut [T] {
+    unsafe fn block<I: Index>(
+        &self,
+        symbolic: &SymbolicSupernodalCholesky<I>,
+        s: usize,
+    ) -> &mut [T] {
         let (begin, end) = (
-            symbolic.col_ptr_for_val()[s],
-            symbolic.col_ptr_for_val()[s + 1],
+            symbolic.col_ptr_for_val()[s].zx(),
+            symbolic.col_ptr_for_val()[s + 1].zx(),
         );
         // SAFETY: inside L's values (faer's layout); exclusive by the caller's contract.
         unsafe { std::slice::from_raw_parts_mut(self.0.add(begin), end - begin) }
@@ -358,10 +365,16 @@ unsafe impl<T: Send> Send for Shared<T> {}
 // SAFETY: as above.
 unsafe impl<T: Sync> Sync for Shared<T> {}
 
+/// [`Workspace`]'s mark of a row outside the supernode being computed; factors of more rows are
+/// not factored here ([`crate::linalg::factor::SparseFactor::prepare_factor_split`]).
+pub const LOCAL_NONE: u32 = u32::MAX;
+
 /// One thread's working memory: the local row of each global row of the supernode being
-/// computed, an update's product, and the dense LLᴴ's scratch.
+/// computed (32-bit: a factor of fewer than 2³² − 1 rows, [`LOCAL_NONE`] for rows outside it;
+/// at 10⁶ planar poses a `usize` map per side was 23 MiB more), an update's product, and the
+/// dense LLᴴ's scratch.
 struct Workspace<T> {
-    local: Vec<usize>,
+    local: Vec<u32>,
     rows: Vec<usize>,
     runs: Vec<usize>,
     product: Vec<T>,
@@ -405,7 +418,7 @@ impl<T: Entry> Workspace<T> {
     /// Room for `split`'s factorizations of dimension n (allocated once, kept after).
     fn ready(&mut self, split: &FactorSplit, n: usize) {
         if self.local.len() != n {
-            self.local = vec![usize::MAX; n];
+            self.local = vec![LOCAL_NONE; n];
         }
         if self.rows.len() < split.max_below {
             self.rows.resize(split.max_below, 0);
@@ -428,16 +441,16 @@ impl<T: Entry> Workspace<T> {
     }
 
     /// Supernode s's rows below its columns, numbered as in its block.
-    fn map_rows(&mut self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) {
-        let k = symbolic.supernode_end()[s] - symbolic.supernode_begin()[s];
-        for (i, &row) in symbolic.supernode(s).pattern().iter().enumerate() {
-            self.local[row] = k + i;
+    fn map_rows<I: Index>(&mut self, symbolic: &SymbolicSupernodalCholesky<I>, s: usize) {
+        let k = symbolic.supernode_end()[s].zx() - symbolic.supernode_begin()[s].zx();
+        for (i, row) in symbolic.supernode(s).pattern().iter().enumerate() {
+            self.local[row.zx()] = (k + i) as u32;
         }
     }
 
-    fn unmap_rows(&mut self, symbolic: &SymbolicSupernodalCholesky<usize>, s: usize) {
-        for &row in symbolic.supernode(s).pattern() {
-            self.local[row] = usize::MAX;
+    fn unmap_rows<I: Index>(&mut self, symbolic: &SymbolicSupernodalCholesky<I>, s: usize) {
+        for row in symbolic.supernode(s).pattern() {
+            self.local[row.zx()] = LOCAL_NONE;
         }
     }
 
@@ -448,26 +461,26 @@ impl<T: Entry> Workspace<T> {
     /// # Safety
     /// d's block is computed and not written by another thread meanwhile.
     #[allow(clippy::too_many_arguments)]
-    unsafe fn update(
+    unsafe fn update<I: Index>(
         &mut self,
         kind: Kind,
         split: &FactorSplit,
-        symbolic: &SymbolicSupernodalCholesky<usize>,
+        symbolic: &SymbolicSupernodalCholesky<I>,
         shared: &Shared<T>,
         block: &mut [T],
         s: usize,
         d: usize,
     ) {
         let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
-        let (s_start, s_end) = (begin[s], end[s]);
+        let (s_start, s_end) = (begin[s].zx(), end[s].zx());
         let s_rows = block.len() / (s_end - s_start);
-        let d_cols = end[d] - begin[d];
+        let d_cols = end[d].zx() - begin[d].zx();
         let d_pattern = symbolic.supernode(d).pattern();
         let d_rows = d_cols + d_pattern.len();
-        let first = d_pattern.partition_point(|&r| r < s_start);
-        let mid = d_pattern[first..].partition_point(|&r| r < s_end);
+        let first = d_pattern.partition_point(|r| r.zx() < s_start);
+        let mid = d_pattern[first..].partition_point(|r| r.zx() < s_end);
         let below = d_pattern.len() - first;
-        let at = symbolic.col_ptr_for_val()[d];
+        let at = symbolic.col_ptr_for_val()[d].zx();
         // SAFETY: d's block, read only (the caller's contract).
         let ld = unsafe { std::slice::from_raw_parts(shared.0.add(at), d_rows * d_cols) };
         let ld = MatRef::from_column_major_slice(ld, d_rows, d_cols);
@@ -490,11 +503,14 @@ impl<T: Entry> Workspace<T> {
         // The rows of the update in s's block: increasing, as d's pattern is; the first `mid`
         // of them are s's columns as well.
         let rows = &mut self.rows[..below];
-        for (local, &row) in rows.iter_mut().zip(&d_pattern[first..]) {
+        for (local, row) in rows
+            .iter_mut()
+            .zip(d_pattern[first..].iter().map(|r| r.zx()))
+        {
             *local = if row < s_end {
                 row - s_start
             } else {
-                self.local[row]
+                self.local[row] as usize
             };
         }
         let s_cols = s_end - s_start;
@@ -585,17 +601,20 @@ impl<T: Entry> Workspace<T> {
     /// s's block is written by no other thread, and the descendants whose updates are computed
     /// here are computed and not written meanwhile.
     #[allow(clippy::too_many_arguments)]
-    unsafe fn supernode(
+    unsafe fn supernode<I: Index>(
         &mut self,
         kind: Kind,
         split: &FactorSplit,
-        symbolic: &SymbolicSupernodalCholesky<usize>,
+        symbolic: &SymbolicSupernodalCholesky<I>,
         shared: &Shared<T>,
-        a_lower: SparseColMatRef<'_, usize, T>,
+        a_lower: SparseColMatRef<'_, I, T>,
         s: usize,
         side_1: Option<&[T]>,
     ) -> Result<(), FailedPivot> {
-        let (s_start, s_end) = (symbolic.supernode_begin()[s], symbolic.supernode_end()[s]);
+        let (s_start, s_end) = (
+            symbolic.supernode_begin()[s].zx(),
+            symbolic.supernode_end()[s].zx(),
+        );
         let k = s_end - s_start;
         let rows = k + symbolic.supernode(s).pattern().len();
         // SAFETY: s's block, this thread's alone (the caller's contract).
@@ -610,7 +629,7 @@ impl<T: Entry> Workspace<T> {
                 let local = if i < s_end {
                     i - s_start
                 } else {
-                    self.local[i]
+                    self.local[i] as usize
                 };
                 column[local] += v;
             }

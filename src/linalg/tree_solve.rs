@@ -31,7 +31,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::traits::ComplexField;
 use faer::traits::math_utils::{conj, mul_real, real, recip};
-use faer::{Accum, Conj, MatMut, Par};
+use faer::{Accum, Conj, Index, MatMut, Par};
 
 /// The scalars of the solve: faer's, with the arithmetic its solve and the loops apply to them.
 pub trait Entry:
@@ -97,7 +97,7 @@ pub const LOOP_MAX_COLUMNS: usize = 16;
 /// Solves L Lᴴ X = B in place on this thread (`x`: B on entry, X on return, in the factor's own
 /// order), supernode by supernode: forward in ascending order, backward in descending order,
 /// the bits of [`TreeSplit::solve_in_place`].
-pub fn solve_sequential<T: Entry>(factor: SupernodalLltRef<'_, usize, T>, x: MatMut<'_, T>) {
+pub fn solve_sequential<T: Entry, I: Index>(factor: SupernodalLltRef<'_, I, T>, x: MatMut<'_, T>) {
     let symbolic = factor.symbolic();
     assert_eq!(x.nrows(), symbolic.nrows());
     let shared = Shared {
@@ -116,7 +116,7 @@ pub fn solve_sequential<T: Entry>(factor: SupernodalLltRef<'_, usize, T>, x: Mat
 }
 
 /// The most rows below any supernode's columns.
-fn max_pattern(symbolic: &SymbolicSupernodalCholesky<usize>) -> usize {
+fn max_pattern<I: Index>(symbolic: &SymbolicSupernodalCholesky<I>) -> usize {
     (0..symbolic.n_supernodes())
         .map(|s| symbolic.supernode(s).pattern().len())
         .max()
@@ -154,10 +154,13 @@ impl TreeSplit {
     /// holds more than 55% of them, the heaviest subtree's root moves into the top set and its
     /// children's subtrees are dealt instead. `None` where the factor holds fewer than
     /// `min_values` values, or the best split's estimate is above 3/4 of one core's.
-    pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>, min_values: usize) -> Option<Self> {
+    pub fn new<I: Index>(
+        symbolic: &SymbolicSupernodalCholesky<I>,
+        min_values: usize,
+    ) -> Option<Self> {
         let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
         let weight = |s: usize| {
-            let cols = end[s] - begin[s];
+            let cols = end[s].zx() - begin[s].zx();
             ((cols + symbolic.supernode(s).pattern().len()) * cols) as f64
         };
         Self::by_weight(symbolic, &weight, min_values as f64)
@@ -165,8 +168,8 @@ impl TreeSplit {
 
     /// As [`Self::new`], each supernode weighing `weight(s)` (the estimate counts these instead
     /// of stored values); `None` below a total of `min_total`.
-    pub fn by_weight(
-        symbolic: &SymbolicSupernodalCholesky<usize>,
+    pub fn by_weight<I: Index>(
+        symbolic: &SymbolicSupernodalCholesky<I>,
         weight: &dyn Fn(usize) -> f64,
         min_total: f64,
     ) -> Option<Self> {
@@ -184,8 +187,8 @@ impl TreeSplit {
         const ROOT: u32 = u32::MAX;
         let mut parent = vec![ROOT; ns];
         for (s, parent) in parent.iter_mut().enumerate() {
-            if let Some(&first) = pattern(s).iter().min() {
-                let p = end.partition_point(|&e| e <= first);
+            if let Some(first) = pattern(s).iter().map(|r| r.zx()).min() {
+                let p = end.partition_point(|e| e.zx() <= first);
                 if p <= s || p >= ns {
                     return None;
                 }
@@ -278,7 +281,7 @@ impl TreeSplit {
         });
         let mut top_row = vec![0u64; n.div_ceil(64)];
         for s in (0..ns).filter(|&s| owner[s] == TOP) {
-            for r in begin[s]..end[s] {
+            for r in begin[s].zx()..end[s].zx() {
                 top_row[r / 64] |= 1 << (r % 64);
             }
         }
@@ -290,7 +293,7 @@ impl TreeSplit {
     }
 
     /// Every supernode on side 0: none on side 1 or in the top set.
-    pub fn one_side(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
+    pub fn one_side<I: Index>(symbolic: &SymbolicSupernodalCholesky<I>) -> Self {
         let ns = symbolic.n_supernodes();
         TreeSplit {
             owner: vec![0; ns],
@@ -321,9 +324,9 @@ impl TreeSplit {
 
     /// Solves L Lᴴ X = B in place (`x`: B on entry, X on return, in the factor's own order: no
     /// fill-reducing permutation applied here), the same bits as [`solve_sequential`].
-    pub fn solve_in_place<T: Entry>(
+    pub fn solve_in_place<T: Entry, I: Index>(
         &self,
-        factor: SupernodalLltRef<'_, usize, T>,
+        factor: SupernodalLltRef<'_, I, T>,
         x: MatMut<'_, T>,
     ) {
         let symbolic = factor.symbolic();
@@ -370,7 +373,7 @@ impl TreeSplit {
                     let side = usize::from(side);
                     let pattern = symbolic.supernode(s).pattern();
                     for j in 0..shared.k {
-                        for &row in pattern {
+                        for row in pattern.iter().map(|r| r.zx()) {
                             if self.is_top_row(row) {
                                 // SAFETY: one thread here; (row, j) is inside x.
                                 unsafe { shared.subtract(row, j, logs[side][next[side]]) };
@@ -452,14 +455,14 @@ impl<T: Entry> Shared<T> {
 }
 
 /// One supernode's forward or backward step, faer's operations, with room for L_bs's product.
-struct Step<'a, 's, T> {
-    factor: SupernodalLltRef<'a, usize, T>,
+struct Step<'a, 's, T, I: Index> {
+    factor: SupernodalLltRef<'a, I, T>,
     x: &'s Shared<T>,
     tmp: Vec<T>,
 }
 
-impl<'a, 's, T: Entry> Step<'a, 's, T> {
-    fn new(factor: SupernodalLltRef<'a, usize, T>, x: &'s Shared<T>, max_pattern: usize) -> Self {
+impl<'a, 's, T: Entry, I: Index> Step<'a, 's, T, I> {
+    fn new(factor: SupernodalLltRef<'a, I, T>, x: &'s Shared<T>, max_pattern: usize) -> Self {
         Step {
             factor,
             x,
@@ -514,7 +517,7 @@ impl<'a, 's, T: Entry> Step<'a, 's, T> {
             );
         }
         for j in 0..k {
-            for (idx, &row) in pattern.iter().enumerate() {
+            for (idx, row) in pattern.iter().map(|r| r.zx()).enumerate() {
                 let t = tmp[(idx, j)];
                 if direct(row, t) {
                     // SAFETY: a row of this thread's side, or of the top set with one thread.
@@ -537,7 +540,7 @@ impl<'a, 's, T: Entry> Step<'a, 's, T> {
             k,
         );
         for j in 0..k {
-            for (idx, &row) in pattern.iter().enumerate() {
+            for (idx, row) in pattern.iter().map(|r| r.zx()).enumerate() {
                 // SAFETY: rows of this side or of the top set, written by no thread now.
                 tmp[(idx, j)] = unsafe { self.x.get(row, j) };
             }

@@ -351,12 +351,30 @@ const SPLIT_FACTOR_MAX_ROWS: usize = 1 << 21;
 
 /// The Newton system's sparse matrix for a fixed rank and pattern.
 pub struct NewtonSystem {
-    /// H + μD in the factor's elimination order, lower triangle.
-    pub assembly: Assembly<f64>,
-    /// The factorization, analyzed once for the pattern (shared by every iterate of a rank).
-    pub factor: SparseFactor<f64>,
+    /// H + μD and its factorization.
+    indexed: Indexed,
     /// The elimination order: `order[new] = old` coordinate.
     order: Vec<usize>,
+}
+
+/// H + μD in the factor's elimination order (lower triangle) and its factorization, analyzed
+/// once for the pattern (shared by every iterate of a rank), with 32-bit row indices and
+/// positions where the counts fit (faer's indices are signed: below 2³¹ entries), else `usize`
+/// ones. The 32-bit ones halve the assembly's and the analysis's index arrays: at 10⁶ planar
+/// poses the assembly's 14·10⁶ row indices alone took 107 MB as `usize`.
+enum Indexed {
+    Narrow(Assembly<f64, u32>, SparseFactor<f64, u32>),
+    Wide(Assembly<f64>, SparseFactor<f64>),
+}
+
+/// `$body` with `$assembly` and `$factor` bound to the system's, whichever their index type.
+macro_rules! indexed {
+    ($indexed:expr, |$assembly:ident, $factor:ident| $body:expr) => {
+        match $indexed {
+            Indexed::Narrow($assembly, $factor) => $body,
+            Indexed::Wide($assembly, $factor) => $body,
+        }
+    };
 }
 
 impl NewtonSystem {
@@ -381,35 +399,42 @@ impl NewtonSystem {
         // supernodes (no relaxation: the fewest stored zeros) were slower with these loops too:
         // 1.06 (MIT) to 1.41 (M3500). Above SPLIT_FACTOR_MAX_ROWS, faer's supernodal LLᵀ.
         let layout = Layout::Supernodal;
-        let assembly = Assembly::blocked(&sizes, &blocks, &row_order, layout.stored_side());
-        let mut factor = SparseFactor::analyze_in_order(
-            assembly.matrix.symbolic(),
-            layout.stored_side(),
-            layout,
+        let side = layout.stored_side();
+        let narrow = Assembly::<f64, u32>::try_blocked(&sizes, &blocks, &row_order, side).and_then(
+            |assembly| {
+                let factor =
+                    SparseFactor::try_analyze_in_order(assembly.matrix.symbolic(), side, layout)?;
+                Some(Indexed::Narrow(assembly, factor))
+            },
         );
-        factor.prepare_split();
-        if factor.dim() <= SPLIT_FACTOR_MAX_ROWS {
-            factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
-        }
-        NewtonSystem {
-            assembly,
-            factor,
-            order,
-        }
+        let mut indexed = narrow.unwrap_or_else(|| {
+            let assembly = Assembly::blocked(&sizes, &blocks, &row_order, side);
+            let factor = SparseFactor::analyze_in_order(assembly.matrix.symbolic(), side, layout);
+            Indexed::Wide(assembly, factor)
+        });
+        indexed!(&mut indexed, |_assembly, factor| {
+            factor.prepare_split();
+            if factor.dim() <= SPLIT_FACTOR_MAX_ROWS {
+                factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
+            }
+        });
+        NewtonSystem { indexed, order }
     }
 
     /// Rewrites the matrix to H + μD at the point whose basis and multipliers are given.
     pub fn update(&mut self, problem: &Problem, basis: &TangentBasis, lambda: &[f64], mu: f64) {
-        self.assembly
-            .fill_with(|fill| basis.hessian_values(problem, lambda, mu, |v| fill.push(v)));
+        indexed!(&mut self.indexed, |assembly, _factor| assembly.fill_with(
+            |fill| basis.hessian_values(problem, lambda, mu, |v| fill.push(v))
+        ))
     }
 
     /// Numeric LLᵀ of the last [`NewtonSystem::update`]; `Err` if H + μD is not numerically
     /// positive definite. On large systems the steps' freed vectors go back to the system first:
     /// the Newton steps hold the solve's peak of memory ([`crate::linalg::heap::release_for`]).
     pub fn factorize(&mut self) -> Result<(), NotFactorable> {
-        crate::linalg::heap::release_for(self.factor.dim());
-        self.factor.llt(self.assembly.matrix.as_ref())
+        crate::linalg::heap::release_for(self.dim());
+        indexed!(&mut self.indexed, |assembly, factor| factor
+            .llt(assembly.matrix.as_ref()))
     }
 
     /// δ with (H + μD) δ = b, b's coordinate k given by `b(k)`, by the last successful
@@ -417,7 +442,41 @@ impl NewtonSystem {
     /// scattered out of it, so that between two solves the system holds no vector (at 10⁶ poses
     /// a kept right-hand side and its permuted copy were 46 MiB at the Newton steps' peak).
     pub fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        self.factor.solve_gathered(&self.order, b)
+        indexed!(&mut self.indexed, |_assembly, factor| factor
+            .solve_gathered(&self.order, b))
+    }
+
+    /// The system's dimension (the tangent space's).
+    pub fn dim(&self) -> usize {
+        indexed!(&self.indexed, |_assembly, factor| factor.dim())
+    }
+
+    /// The multiply-adds of one factorization ([`SparseFactor::multiply_adds`]).
+    pub fn multiply_adds(&self) -> f64 {
+        indexed!(&self.indexed, |_assembly, factor| factor.multiply_adds())
+    }
+
+    /// The number of values of the numeric factor ([`SparseFactor::values_len`]).
+    pub fn values_len(&self) -> usize {
+        indexed!(&self.indexed, |_assembly, factor| factor.values_len())
+    }
+
+    /// Whether its factorizations are split between the cores
+    /// ([`SparseFactor::splits_factorizations`]).
+    pub fn splits_factorizations(&self) -> bool {
+        indexed!(&self.indexed, |_assembly, factor| factor
+            .splits_factorizations())
+    }
+
+    /// The room of the first factorization's values ([`SparseFactor::reuse`]).
+    pub fn reuse(&mut self, values: Vec<f64>) {
+        indexed!(&mut self.indexed, |_assembly, factor| factor.reuse(values))
+    }
+
+    /// The numeric factor's values, handed over, the factor released
+    /// ([`SparseFactor::take_values`]).
+    pub fn take_values(&mut self) -> Vec<f64> {
+        indexed!(&mut self.indexed, |_assembly, factor| factor.take_values())
     }
 }
 

@@ -477,7 +477,7 @@ fn system_for<'a>(
     problem: &Problem,
     basis: &TangentBasis,
 ) -> &'a mut NewtonSystem {
-    if system.as_ref().is_some_and(|s| s.factor.dim() == basis.dim) {
+    if system.as_ref().is_some_and(|s| s.dim() == basis.dim) {
         return system.as_mut().expect("checked");
     }
     system.insert(NewtonSystem::new(problem, basis.p))
@@ -517,7 +517,7 @@ fn optimize_in(
         *system = arriving();
     }
     let system = system_for(system, problem, &at.basis);
-    let step_work = system.factor.multiply_adds();
+    let step_work = system.multiply_adds();
     let max_iterations = match work_limit {
         Some(w) => options.max_iterations.min(
             options
@@ -892,11 +892,11 @@ fn solve_from_start(
     let ((mut positions, local, mut rank_one), certifier) = crate::linalg::parallel::ahead(
         || {
             let system = NewtonSystem::new(problem, 1);
-            if system.factor.dim() < RELEASE_FROM_ROWS {
-                room.prepare(system.factor.values_len());
+            if system.dim() < RELEASE_FROM_ROWS {
+                room.prepare(system.values_len());
             }
             descent_splits.store(
-                system.factor.splits_factorizations(),
+                system.splits_factorizations(),
                 std::sync::atomic::Ordering::Relaxed,
             );
             system
@@ -925,7 +925,7 @@ fn solve_from_start(
                     &mut rank_one,
                     &|| {
                         system.take().map(|mut system| {
-                            system.factor.reuse(room.take());
+                            system.reuse(room.take());
                             system
                         })
                     },
@@ -986,7 +986,7 @@ fn solve_from_start(
     // at 2.9 GiB with it, 2.5 GiB without. A polish after the certificate, which none of the
     // public files needs, builds it again.
     if let Some(mut system) = rank_one.take() {
-        certifier.reuse(system.factor.take_values());
+        certifier.reuse(system.take_values());
     }
     // Rank 1 first: the common case. A proof within 64x the certificate's resolution means the
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
