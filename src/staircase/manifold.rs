@@ -341,14 +341,6 @@ fn sphere_basis(y: &[c64], out: &mut Vec<c64>) {
 /// ms instead of 2.4.
 const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
 
-/// The most rows of a Newton system whose LLᵀ is split between two cores: the split's working
-/// memory (a map of the rows per side, 8 bytes a row, side 1's room for its updates of the top
-/// set, the lists of updates) stays beside the factor's peak. At 10⁶ poses (3·10⁶ rows, 46 MB
-/// of it) the split took the whole process from 11.7 s to 9.8-10.0 s but its peak from 2015-2022
-/// MiB to 2057-2088 MiB (three runs each, interleaved), over the 2 GiB this size is asked to fit
-/// in; 10⁵ poses (3·10⁵ rows) and the public files are split.
-const SPLIT_FACTOR_MAX_ROWS: usize = 1 << 21;
-
 /// The Newton system's sparse matrix for a fixed rank and pattern.
 pub struct NewtonSystem {
     /// H + μD and its factorization.
@@ -397,7 +389,12 @@ impl NewtonSystem {
         // interleaved runs: ais2klinik 0.85, intel 0.88-0.96, victoriaPark 0.90-0.97, FRH 0.94,
         // ring 0.96, kitti_00 and kitti_02 0.975, MIT 0.98-1.01, CSAIL 1.01-1.03. Fundamental
         // supernodes (no relaxation: the fewest stored zeros) were slower with these loops too:
-        // 1.06 (MIT) to 1.41 (M3500). Above SPLIT_FACTOR_MAX_ROWS, faer's supernodal LLᵀ.
+        // 1.06 (MIT) to 1.41 (M3500). At every size: at 10⁶ poses (3·10⁶ rows) the split's
+        // working memory (a 32-bit map of the rows per side, side 1's room for its updates of the
+        // top set, the lists of updates) once took the peak over 2 GiB (2057-2088 MiB against
+        // 2015-2022 unsplit); with the 32-bit indices of [`Indexed`] the split runs peaked at
+        // 1892-1953 MiB and took 11.6-12.5 s (six runs) against 1872-1910 MiB and 14.4-15.1 s
+        // unsplit (five), and the whole tool at 1908-1938 MiB and 12.0-13.7 s in six more.
         let layout = Layout::Supernodal;
         let side = layout.stored_side();
         let narrow = Assembly::<f64, u32>::try_blocked(&sizes, &blocks, &row_order, side).and_then(
@@ -414,9 +411,7 @@ impl NewtonSystem {
         });
         indexed!(&mut indexed, |_assembly, factor| {
             factor.prepare_split();
-            if factor.dim() <= SPLIT_FACTOR_MAX_ROWS {
-                factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
-            }
+            factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
         });
         NewtonSystem { indexed, order }
     }
