@@ -34,6 +34,16 @@ pub fn second_core() -> bool {
 /// 0.9 of its one-core time with two.
 pub const SHARED_FROM_EDGES: usize = 50;
 
+/// `work()` for a graph of `terms` edges (and observations): [`alone`] below
+/// [`SHARED_FROM_EDGES`], else as it is.
+pub fn alone_if_small<R>(terms: usize, work: impl FnOnce() -> R) -> R {
+    if terms < SHARED_FROM_EDGES {
+        alone(work)
+    } else {
+        work()
+    }
+}
+
 /// `work()` with every task it gives ([`join`], [`ahead`], [`halves`], [`when_idle`]) run on
 /// this thread, as on one core: the same bits (module docs), none of the second core's costs.
 /// For a computation too small to share ([`SHARED_FROM_EDGES`]).

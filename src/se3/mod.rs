@@ -166,12 +166,9 @@ pub fn solve_graph3_from(
     options: &Options3,
     report: &mut dyn FnMut(Step3),
 ) -> Solution3 {
-    let mut solve = || solve_problem(graph, weights, start, options, report);
-    if graph.edges.len() < crate::linalg::parallel::SHARED_FROM_EDGES {
-        crate::linalg::parallel::alone(solve)
-    } else {
-        solve()
-    }
+    crate::linalg::parallel::alone_if_small(graph.edges.len(), || {
+        solve_problem(graph, weights, start, options, report)
+    })
 }
 
 /// [`solve_graph3_from`]'s work, on one core or two.

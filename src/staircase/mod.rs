@@ -318,12 +318,9 @@ pub fn solve_anchored_from(
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<(StaircaseSolution, Anchored)> {
     let terms = graph.edges.len() + graph.landmarks.observations.len();
-    let mut solve = || solve_anchored_here(graph, weights, options, start, observer);
-    if terms < crate::linalg::parallel::SHARED_FROM_EDGES {
-        crate::linalg::parallel::alone(solve)
-    } else {
-        solve()
-    }
+    crate::linalg::parallel::alone_if_small(terms, || {
+        solve_anchored_here(graph, weights, options, start, observer)
+    })
 }
 
 /// [`solve_anchored_from`]'s work, on one core or two.
@@ -823,15 +820,10 @@ pub fn solve_from(
     options: &StaircaseOptions,
     observer: &mut dyn FnMut(&Iteration),
 ) -> StaircaseSolution {
-    let solve = || {
+    crate::linalg::parallel::alone_if_small(problem.terms.len(), || {
         solve_from_start(problem, || Some(start), options, observer)
             .expect("a given start is always there")
-    };
-    if problem.terms.len() < crate::linalg::parallel::SHARED_FROM_EDGES {
-        crate::linalg::parallel::alone(solve)
-    } else {
-        solve()
-    }
+    })
 }
 
 /// As [`solve_from`], from the rank-1 point that `start` computes (the chordal initialization) on
