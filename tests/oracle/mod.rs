@@ -10,6 +10,7 @@
 #![allow(dead_code)]
 
 use pgo::PoseGraph;
+use pgo::graph::Pose2;
 use pgo::io::{self, ReadOptions};
 
 /// Largest graph [`check_solve`] solves (the dense SDP path is cubic).
@@ -73,7 +74,8 @@ fn check_solution(
     s: &pgo::dual::algorithm1::ComponentSolution,
 ) {
     use pgo::problem::matrix::cost;
-    assert_eq!(s.poses.len(), part.num_poses());
+    // The estimate: the poses, then the landmarks' positions (as poses of heading 0).
+    assert_eq!(s.poses.len(), part.num_poses() + part.landmarks.len());
     assert!(s.cost.is_finite() && s.cost >= 0.0, "cost {}", s.cost);
     assert!(!s.lower_bound.is_nan(), "bound is NaN");
     // Rounding of the cost itself: every term is a sum of a few products.
@@ -85,7 +87,15 @@ fn check_solution(
         s.cost
     );
     // Weak duality: the bound is below the cost of every feasible point, e.g. the input's.
-    let input_cost = cost(part, weights, &part.poses);
+    let input: Vec<Pose2> = (part.poses.iter().copied())
+        .chain(
+            part.landmarks
+                .positions
+                .iter()
+                .map(|&[x, y]| Pose2::new(x, y, 0.0)),
+        )
+        .collect();
+    let input_cost = cost(part, weights, &input);
     if input_cost.is_finite() {
         assert!(
             s.lower_bound <= input_cost + slack(input_cost),
@@ -107,6 +117,11 @@ fn check_solution(
             .iter()
             .zip(weights)
             .map(|(e, w)| w.tau * (e.measurement.x.powi(2) + e.measurement.y.powi(2)) + w.kappa)
+            .chain(
+                (part.landmarks.observations.iter())
+                    .zip(&weights[part.edges.len()..])
+                    .map(|(o, w)| w.tau * (o.d[0].powi(2) + o.d[1].powi(2))),
+            )
             .sum();
         if scale.is_finite() {
             assert!(
