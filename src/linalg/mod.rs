@@ -1,5 +1,6 @@
 //! Numerical linear algebra, knowing nothing of pose graphs: sparse LLᴴ/LDLᴴ factorizations with
-//! their a-posteriori backward errors ([`factor`]), the shift-invert subspace iteration for the
+//! their a-posteriori backward errors ([`factor`]), a block system with its factorization in
+//! 32-bit indices where they fit ([`block_system`]), the shift-invert subspace iteration for the
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
 //! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
 //! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
@@ -11,6 +12,7 @@
 //!
 //! May use: faer, libc (the allocator) and the standard library only; nothing else of pgo.
 
+pub mod block_system;
 pub mod eigen;
 pub mod factor;
 pub mod heap;

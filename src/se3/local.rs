@@ -12,7 +12,8 @@
 
 use super::problem::{Point3, Problem3};
 use super::stiefel::{polar_rows, tangent_basis};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor, block_coordinates, group_ordering};
+use crate::linalg::block_system::BlockSystem;
+use crate::linalg::factor::{Assembly, SparseFactor, block_coordinates, group_ordering};
 
 /// One step, for progress reports.
 #[derive(Debug, Clone, Copy)]
@@ -137,8 +138,8 @@ pub struct System {
     p: usize,
     offset: Vec<usize>,
     dims: Vec<usize>,
-    assembly: Assembly<f64>,
-    factor: SparseFactor<f64>,
+    /// H + μD and its factorization ([`BlockSystem`]: 32-bit indices where they fit).
+    system: BlockSystem,
     /// Index of the first value of each pair's block in the value list.
     diagonal: Vec<usize>,
     count: usize,
@@ -189,21 +190,12 @@ impl System {
         // ([`SparseFactor::prepare_own_factorization`]); where it does not split, on one core
         // with the narrow supernodes by loops: smallGrid3D 0.96 of faer's time whole process (41
         // interleaved runs), tinyGrid3D 1.00.
-        let layout = Layout::Supernodal;
-        let assembly = Assembly::blocked(&dims, &problem.pairs, &poses, layout.stored_side());
-        let mut factor = SparseFactor::analyze_in_order(
-            assembly.matrix.symbolic(),
-            layout.stored_side(),
-            layout,
-        );
-        factor.prepare_split();
-        factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
+        let system = BlockSystem::new(&dims, &problem.pairs, &poses, SPLIT_FACTOR_MIN_WORK);
         System {
             p,
             offset,
             dims,
-            assembly,
-            factor,
+            system,
             diagonal,
             count,
             order,
@@ -213,7 +205,7 @@ impl System {
     /// The solution of the last factorization's system for b, b's coordinate k given by `b(k)`
     /// (coordinates in the pose order; [`SparseFactor::solve_gathered`]).
     fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        self.factor.solve_gathered(&self.order, b)
+        self.system.solve_gathered(&self.order, b)
     }
 
     fn dim(&self) -> usize {
@@ -222,7 +214,7 @@ impl System {
 
     /// The number of values of its factor (the room of [`crate::linalg::heap::Room`]).
     pub fn values_len(&self) -> usize {
-        self.factor.values_len()
+        self.system.values_len()
     }
 }
 
@@ -729,13 +721,13 @@ pub fn optimize_with(
                 for &k in &sys.diagonal {
                     damped[k] += mu * values[k].abs().max(1e-12 * dmax);
                 }
-                sys.assembly.fill(&damped);
-                work += sys.factor.multiply_adds();
+                sys.system.fill(&damped);
+                work += sys.system.multiply_adds();
                 if first_factorization {
                     first_factorization = false;
-                    sys.factor.reuse(room());
+                    sys.system.reuse(room());
                 }
-                if sys.factor.llt(sys.assembly.matrix.as_ref()).is_err() {
+                if sys.system.llt().is_err() {
                     // H + μD is not positive definite: at least FAILED_STEP_DAMPING, then
                     // doubling. Doubling from 1e-6 took four failed factorizations, each as
                     // dear as a successful one, on sphere_bignoise's chordal start.
@@ -806,7 +798,7 @@ pub fn optimize_with(
         iterations,
         converged,
         work,
-        room: sys.factor.take_values(),
+        room: sys.system.take_values(),
     }
 }
 

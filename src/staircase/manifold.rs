@@ -4,7 +4,8 @@
 //! Riemannian Hessian 2Bᵀ W̃(λ) B in that basis (Sec. 4.1, real form of eq. (16)), the
 //! retraction, and the sparse Newton system built from them.
 
-use crate::linalg::factor::{Assembly, Layout, NotFactorable, SparseFactor, block_coordinates};
+use crate::linalg::block_system::BlockSystem;
+use crate::linalg::factor::{NotFactorable, block_coordinates};
 use crate::problem::matrix::entry_pattern;
 use crate::problem::rank_p::{Point, Problem, dot};
 use faer::c64;
@@ -343,30 +344,11 @@ const SPLIT_FACTOR_MIN_WORK: f64 = 5e6;
 
 /// The Newton system's sparse matrix for a fixed rank and pattern.
 pub struct NewtonSystem {
-    /// H + μD and its factorization.
-    indexed: Indexed,
+    /// H + μD in the factor's elimination order (lower triangle) and its factorization, analyzed
+    /// once for the pattern (shared by every iterate of a rank).
+    system: BlockSystem,
     /// The elimination order: `order[new] = old` coordinate.
     order: Vec<usize>,
-}
-
-/// H + μD in the factor's elimination order (lower triangle) and its factorization, analyzed
-/// once for the pattern (shared by every iterate of a rank), with 32-bit row indices and
-/// positions where the counts fit (faer's indices are signed: below 2³¹ entries), else `usize`
-/// ones. The 32-bit ones halve the assembly's and the analysis's index arrays: at 10⁶ planar
-/// poses the assembly's 14·10⁶ row indices alone took 107 MB as `usize`.
-enum Indexed {
-    Narrow(Assembly<f64, u32>, SparseFactor<f64, u32>),
-    Wide(Assembly<f64>, SparseFactor<f64>),
-}
-
-/// `$body` with `$assembly` and `$factor` bound to the system's, whichever their index type.
-macro_rules! indexed {
-    ($indexed:expr, |$assembly:ident, $factor:ident| $body:expr) => {
-        match $indexed {
-            Indexed::Narrow($assembly, $factor) => $body,
-            Indexed::Wide($assembly, $factor) => $body,
-        }
-    };
 }
 
 impl NewtonSystem {
@@ -395,32 +377,14 @@ impl NewtonSystem {
         // 2015-2022 unsplit); with the 32-bit indices of [`Indexed`] the split runs peaked at
         // 1892-1953 MiB and took 11.6-12.5 s (six runs) against 1872-1910 MiB and 14.4-15.1 s
         // unsplit (five), and the whole tool at 1908-1938 MiB and 12.0-13.7 s in six more.
-        let layout = Layout::Supernodal;
-        let side = layout.stored_side();
-        let narrow = Assembly::<f64, u32>::try_blocked(&sizes, &blocks, &row_order, side).and_then(
-            |assembly| {
-                let factor =
-                    SparseFactor::try_analyze_in_order(assembly.matrix.symbolic(), side, layout)?;
-                Some(Indexed::Narrow(assembly, factor))
-            },
-        );
-        let mut indexed = narrow.unwrap_or_else(|| {
-            let assembly = Assembly::blocked(&sizes, &blocks, &row_order, side);
-            let factor = SparseFactor::analyze_in_order(assembly.matrix.symbolic(), side, layout);
-            Indexed::Wide(assembly, factor)
-        });
-        indexed!(&mut indexed, |_assembly, factor| {
-            factor.prepare_split();
-            factor.prepare_own_factorization(SPLIT_FACTOR_MIN_WORK);
-        });
-        NewtonSystem { indexed, order }
+        let system = BlockSystem::new(&sizes, &blocks, &row_order, SPLIT_FACTOR_MIN_WORK);
+        NewtonSystem { system, order }
     }
 
     /// Rewrites the matrix to H + μD at the point whose basis and multipliers are given.
     pub fn update(&mut self, problem: &Problem, basis: &TangentBasis, lambda: &[f64], mu: f64) {
-        indexed!(&mut self.indexed, |assembly, _factor| assembly.fill_with(
-            |fill| basis.hessian_values(problem, lambda, mu, |v| fill.push(v))
-        ))
+        self.system
+            .fill_with(|fill| basis.hessian_values(problem, lambda, mu, |v| fill.push(v)));
     }
 
     /// Numeric LLᵀ of the last [`NewtonSystem::update`]; `Err` if H + μD is not numerically
@@ -428,8 +392,7 @@ impl NewtonSystem {
     /// the Newton steps hold the solve's peak of memory ([`crate::linalg::heap::release_for`]).
     pub fn factorize(&mut self) -> Result<(), NotFactorable> {
         crate::linalg::heap::release_for(self.dim());
-        indexed!(&mut self.indexed, |assembly, factor| factor
-            .llt(assembly.matrix.as_ref()))
+        self.system.llt()
     }
 
     /// δ with (H + μD) δ = b, b's coordinate k given by `b(k)`, by the last successful
@@ -437,41 +400,37 @@ impl NewtonSystem {
     /// scattered out of it, so that between two solves the system holds no vector (at 10⁶ poses
     /// a kept right-hand side and its permuted copy were 46 MiB at the Newton steps' peak).
     pub fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        indexed!(&mut self.indexed, |_assembly, factor| factor
-            .solve_gathered(&self.order, b))
+        self.system.solve_gathered(&self.order, b)
     }
 
     /// The system's dimension (the tangent space's).
     pub fn dim(&self) -> usize {
-        indexed!(&self.indexed, |_assembly, factor| factor.dim())
+        self.system.dim()
     }
 
-    /// The multiply-adds of one factorization ([`SparseFactor::multiply_adds`]).
+    /// The multiply-adds of one factorization.
     pub fn multiply_adds(&self) -> f64 {
-        indexed!(&self.indexed, |_assembly, factor| factor.multiply_adds())
+        self.system.multiply_adds()
     }
 
-    /// The number of values of the numeric factor ([`SparseFactor::values_len`]).
+    /// The number of values of the numeric factor.
     pub fn values_len(&self) -> usize {
-        indexed!(&self.indexed, |_assembly, factor| factor.values_len())
+        self.system.values_len()
     }
 
-    /// Whether its factorizations are split between the cores
-    /// ([`SparseFactor::splits_factorizations`]).
+    /// Whether its factorizations are split between the cores.
     pub fn splits_factorizations(&self) -> bool {
-        indexed!(&self.indexed, |_assembly, factor| factor
-            .splits_factorizations())
+        self.system.splits_factorizations()
     }
 
-    /// The room of the first factorization's values ([`SparseFactor::reuse`]).
+    /// The room of the first factorization's values ([`BlockSystem::reuse`]).
     pub fn reuse(&mut self, values: Vec<f64>) {
-        indexed!(&mut self.indexed, |_assembly, factor| factor.reuse(values))
+        self.system.reuse(values)
     }
 
-    /// The numeric factor's values, handed over, the factor released
-    /// ([`SparseFactor::take_values`]).
+    /// The numeric factor's values, handed over, the factor released.
     pub fn take_values(&mut self) -> Vec<f64> {
-        indexed!(&mut self.indexed, |_assembly, factor| factor.take_values())
+        self.system.take_values()
     }
 }
 
