@@ -374,7 +374,7 @@ impl NewtonSystem {
         // 1.06 (MIT) to 1.41 (M3500). At every size: at 10⁶ poses (3·10⁶ rows) the split's
         // working memory (a 32-bit map of the rows per side, side 1's room for its updates of the
         // top set, the lists of updates) once took the peak over 2 GiB (2057-2088 MiB against
-        // 2015-2022 unsplit); with the 32-bit indices of [`Indexed`] the split runs peaked at
+        // 2015-2022 unsplit); with the 32-bit indices of [`BlockSystem`] the split runs peaked at
         // 1892-1953 MiB and took 11.6-12.5 s (six runs) against 1872-1910 MiB and 14.4-15.1 s
         // unsplit (five), and the whole tool at 1908-1938 MiB and 12.0-13.7 s in six more.
         let system = BlockSystem::new(&sizes, &blocks, &row_order, SPLIT_FACTOR_MIN_WORK);
