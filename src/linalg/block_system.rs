@@ -7,11 +7,13 @@
 //! index arrays (at 10⁶ planar poses the assembly's 14·10⁶ row indices alone took 107 MB as
 //! `usize`), and the factor's values are the same bits either way.
 
-use super::factor::{Assembly, Fill, Layout, NotFactorable, SparseFactor};
+use super::factor::{Assembly, Fill, Layout, NotFactorable, SparseFactor, block_coordinates};
 
 /// The matrix and its factorization ([`BlockSystem::new`]).
 pub struct BlockSystem {
     indexed: Indexed,
+    /// The elimination order of the coordinates: `order[new] = old` (each block's together).
+    order: Vec<usize>,
 }
 
 /// The assembly and the factor with 32-bit or with `usize` indices.
@@ -35,7 +37,7 @@ impl BlockSystem {
     /// `blocks`, the blocks in the elimination `order`, `order[new] = old`), stored and analyzed
     /// supernodally; its LLᵀ by our own code ([`SparseFactor::prepare_own_factorization`]: split
     /// between the cores from `split_min_work` multiply-adds), its solves split where large
-    /// ([`SparseFactor::prepare_split`]).
+    /// ([`SparseFactor::prepare_split`]). Coordinates are numbered block by block, in index order.
     pub fn new(
         sizes: &[usize],
         blocks: &[(usize, usize)],
@@ -59,7 +61,12 @@ impl BlockSystem {
             factor.prepare_split();
             factor.prepare_own_factorization(split_min_work);
         });
-        BlockSystem { indexed }
+        let mut offset = vec![0; sizes.len() + 1];
+        for (u, &size) in sizes.iter().enumerate() {
+            offset[u + 1] = offset[u] + size;
+        }
+        let order = block_coordinates(order, &offset);
+        BlockSystem { indexed, order }
     }
 
     /// Rewrites the values ([`Assembly::fill`]).
@@ -80,8 +87,11 @@ impl BlockSystem {
             .llt(assembly.matrix.as_ref()))
     }
 
-    /// x with A x = b by the last successful LLᵀ ([`SparseFactor::solve_gathered`]).
-    pub fn solve_gathered(&mut self, order: &[usize], b: impl Fn(usize) -> f64) -> Vec<f64> {
+    /// x with A x = b by the last successful LLᵀ, b's coordinate k given by `b(k)`, gathered
+    /// straight into the elimination order and x scattered out of it
+    /// ([`SparseFactor::solve_gathered`]).
+    pub fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
+        let order = &self.order;
         indexed!(&mut self.indexed, |_assembly, factor| factor
             .solve_gathered(order, b))
     }

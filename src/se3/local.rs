@@ -13,7 +13,7 @@
 use super::problem::{Point3, Problem3};
 use super::stiefel::{polar_rows, tangent_basis};
 use crate::linalg::block_system::BlockSystem;
-use crate::linalg::factor::{Assembly, SparseFactor, block_coordinates, group_ordering};
+use crate::linalg::factor::{Assembly, SparseFactor, group_ordering};
 
 /// One step, for progress reports.
 #[derive(Debug, Clone, Copy)]
@@ -143,8 +143,6 @@ pub struct System {
     /// Index of the first value of each pair's block in the value list.
     diagonal: Vec<usize>,
     count: usize,
-    /// The elimination order (`order[new] = old` coordinate).
-    order: Vec<usize>,
 }
 
 impl System {
@@ -183,7 +181,6 @@ impl System {
         }
         // Poses in the fill-reducing order, each pose's coordinates together.
         let poses = group_ordering(problem.pose_rank(), &(0..n).collect::<Vec<_>>());
-        let order = block_coordinates(&poses, &offset);
         // Supernodal, assembled directly in its elimination order and triangle (factored without
         // a permuted copy), as the planar systems: with 6x6 pose blocks these have flop ratios of
         // 27 to 199 on the public 3D files (9 on tinyGrid3D's 9 poses). By our own code
@@ -198,14 +195,13 @@ impl System {
             system,
             diagonal,
             count,
-            order,
         }
     }
 
     /// The solution of the last factorization's system for b, b's coordinate k given by `b(k)`
-    /// (coordinates in the pose order; [`SparseFactor::solve_gathered`]).
+    /// (coordinates in the pose order; [`BlockSystem::solve`]).
     fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        self.system.solve_gathered(&self.order, b)
+        self.system.solve(b)
     }
 
     fn dim(&self) -> usize {

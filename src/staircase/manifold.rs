@@ -5,7 +5,7 @@
 //! retraction, and the sparse Newton system built from them.
 
 use crate::linalg::block_system::BlockSystem;
-use crate::linalg::factor::{NotFactorable, block_coordinates};
+use crate::linalg::factor::NotFactorable;
 use crate::problem::matrix::entry_pattern;
 use crate::problem::rank_p::{Point, Problem, dot};
 use faer::c64;
@@ -347,8 +347,6 @@ pub struct NewtonSystem {
     /// H + μD in the factor's elimination order (lower triangle) and its factorization, analyzed
     /// once for the pattern (shared by every iterate of a rank).
     system: BlockSystem,
-    /// The elimination order: `order[new] = old` coordinate.
-    order: Vec<usize>,
 }
 
 impl NewtonSystem {
@@ -361,7 +359,6 @@ impl NewtonSystem {
         let sizes: Vec<usize> = offsets.windows(2).map(|w| w[1] - w[0]).collect();
         let blocks = entry_pattern(&problem.matrix.upper);
         let row_order = problem.row_order();
-        let order = block_coordinates(&row_order, &offsets);
         // Supernodal, assembled directly in its order and in the triangle its factorizations
         // read, and factored by our own code ([`SparseFactor::prepare_own_factorization`]: split
         // between the cores from SPLIT_FACTOR_MIN_WORK, else on one, the narrow supernodes by
@@ -378,7 +375,7 @@ impl NewtonSystem {
         // 1892-1953 MiB and took 11.6-12.5 s (six runs) against 1872-1910 MiB and 14.4-15.1 s
         // unsplit (five), and the whole tool at 1908-1938 MiB and 12.0-13.7 s in six more.
         let system = BlockSystem::new(&sizes, &blocks, &row_order, SPLIT_FACTOR_MIN_WORK);
-        NewtonSystem { system, order }
+        NewtonSystem { system }
     }
 
     /// Rewrites the matrix to H + μD at the point whose basis and multipliers are given.
@@ -400,7 +397,7 @@ impl NewtonSystem {
     /// scattered out of it, so that between two solves the system holds no vector (at 10⁶ poses
     /// a kept right-hand side and its permuted copy were 46 MiB at the Newton steps' peak).
     pub fn solve(&mut self, b: impl Fn(usize) -> f64) -> Vec<f64> {
-        self.system.solve_gathered(&self.order, b)
+        self.system.solve(b)
     }
 
     /// The system's dimension (the tangent space's).
