@@ -412,7 +412,8 @@ impl<T: Scalar, I: Index> SparseFactor<T, I> {
         else {
             return None;
         };
-        let two_cores = split.splits() && crate::linalg::parallel::second_core_idle();
+        // Where the second core is busy building ahead, side 1 is offered to it.
+        let two_cores = split.splits() && crate::linalg::parallel::second_core();
         let result = split.factorize(
             kind,
             symbolic,
@@ -2159,6 +2160,59 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A split factorization asked for while the second core works ahead
+    /// ([`crate::linalg::parallel::ahead`]) offers side 1 to it
+    /// ([`crate::linalg::parallel::join_or_offer`]), which takes it at a pause: the factor is
+    /// the one-core factor, bit for bit, whichever thread factors side 1.
+    #[test]
+    fn a_side_taken_by_the_work_ahead_gives_the_one_core_bits() {
+        use crate::linalg::tree_factor::SplitRoom;
+        let GridFactor {
+            mut assembly,
+            values,
+            factor: f,
+            ..
+        } = grid_factor(&|rng| rng.normal().abs() + 0.5, 5);
+        assembly.fill(&values);
+        let SymbolicCholeskyRaw::Supernodal(symbolic) = f.symbolic.raw() else {
+            panic!("supernodal");
+        };
+        let split = FactorSplit::new(symbolic, 0.0).expect("the tree splits");
+        let factor = |two_cores: bool| {
+            let mut ours = vec![0.0f64; symbolic.len_val()];
+            split
+                .factorize(
+                    Kind::Llt,
+                    symbolic,
+                    &mut ours,
+                    assembly.matrix.as_ref(),
+                    &mut SplitRoom::default(),
+                    two_cores,
+                )
+                .expect("diagonally dominant");
+            ours.iter().map(|x| x.to_bits()).collect::<Vec<u64>>()
+        };
+        let alone = factor(false);
+        let done = std::sync::atomic::AtomicBool::new(false);
+        let (offered, ()) = crate::linalg::parallel::ahead(
+            || {
+                // Work ahead that pauses until the factorization is done.
+                while !done.load(std::sync::atomic::Ordering::Acquire) {
+                    crate::linalg::parallel::take_offer();
+                    std::thread::yield_now();
+                }
+            },
+            || (),
+            || (),
+            |_, _| {
+                let bits = factor(true);
+                done.store(true, std::sync::atomic::Ordering::Release);
+                bits
+            },
+        );
+        assert_eq!(offered, alone);
     }
 
     /// A matrix that is not positive definite is refused by the split factorization as by

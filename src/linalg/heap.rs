@@ -124,6 +124,8 @@ impl Room {
                 at += 4096;
             }
             self.done.fetch_add(1, Ordering::AcqRel);
+            // A pause for a factorization's side on offer (a chunk takes about 0.1 ms).
+            crate::linalg::parallel::take_offer();
         }
     }
 

@@ -143,6 +143,129 @@ fn beside<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send) -
 /// A job for the second core's thread, its lifetime erased by [`beside`].
 type Job = Box<dyn FnOnce() + Send + 'static>;
 
+/// `(a(), b())` as [`join`], and where the second core is busy with work built [`ahead`], `b`
+/// offered to it instead of waiting for it: that work takes the offer at its next pause
+/// ([`take_offer`]) and runs `b` there, unless this thread, done with `a`, comes back for `b`
+/// first and runs it itself. For the two sides of a split factorization that would otherwise run
+/// one after the other here while the second core builds the certificate's analysis (torus3D's
+/// first Newton LLᵀ: 49 ms on one core, 33 ms on two). Whichever thread runs `b`, it is the
+/// same computation: the same results. A panic in `b` is resumed here.
+pub fn join_or_offer<RA, RB: Send>(
+    a: impl FnOnce() -> RA,
+    b: impl FnOnce() -> RB + Send,
+) -> (RA, RB) {
+    if !second_core() || second_core_idle() {
+        return join(a, b);
+    }
+    offer_in(&OFFER, a, b)
+}
+
+/// A pause in work built [`ahead`]: runs the task on offer ([`join_or_offer`]), if there is one,
+/// before that work goes on. Called between the steps of the analyses the second core builds
+/// ahead, so that an offer waits at most one step.
+pub fn take_offer() {
+    take_offer_from(&OFFER);
+}
+
+/// A slot for a task on offer, with the thread that offered it.
+type Offers = std::sync::Mutex<Option<(std::thread::ThreadId, Job)>>;
+
+/// The task on offer to the second core ([`join_or_offer`]).
+static OFFER: Offers = std::sync::Mutex::new(None);
+
+/// Runs the task in `offers`, if there is one.
+fn take_offer_from(offers: &Offers) {
+    let job = lock(offers).take();
+    if let Some((_, job)) = job {
+        job();
+    }
+}
+
+/// [`join_or_offer`] with `b` put in `offers`: `a` here, then `b` taken back and run here unless
+/// a [`take_offer_from`] took it meanwhile (then its end waited for). Where `offers` holds a task
+/// already (an enclosing call's), `b` simply runs here after `a`.
+fn offer_in<RA, RB: Send>(
+    offers: &Offers,
+    a: impl FnOnce() -> RA,
+    b: impl FnOnce() -> RB + Send,
+) -> (RA, RB) {
+    let slot: std::sync::Mutex<Option<std::thread::Result<RB>>> = std::sync::Mutex::new(None);
+    // Shared: the thread that runs the job still holds it while it opens it.
+    let latch = std::sync::Arc::new(Latch::default());
+    let job: Box<dyn FnOnce() + Send + '_> = Box::new({
+        let (slot, latch) = (&slot, latch.clone());
+        move || {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(b));
+            *lock(slot) = Some(result);
+            latch.open();
+        }
+    });
+    // SAFETY: the job borrows `b`'s captures and `slot`, which live until this function
+    // returns; before it returns (or unwinds past them) the job is either taken back unrun, or
+    // run, here or by the thread that took it, and waited for ([`Withdraw`]).
+    let job: Job = unsafe {
+        std::mem::transmute::<Box<dyn FnOnce() + Send + '_>, Box<dyn FnOnce() + Send + 'static>>(
+            job,
+        )
+    };
+    let me = std::thread::current().id();
+    let mut offered = lock(offers);
+    if offered.is_some() {
+        drop(offered);
+        let ra = a();
+        job();
+        return (ra, take_result(&slot));
+    }
+    *offered = Some((me, job));
+    drop(offered);
+    let withdraw = Withdraw {
+        offers,
+        latch: &latch,
+        me,
+    };
+    let ra = a();
+    if let Some(job) = withdraw.back() {
+        job();
+    }
+    drop(withdraw);
+    (ra, take_result(&slot))
+}
+
+/// Takes an offer of [`offer_in`] back unrun if it is still there, else waits for the thread
+/// that took it to finish it, when dropped (also while `a` unwinds).
+struct Withdraw<'a> {
+    offers: &'a Offers,
+    latch: &'a Latch,
+    me: std::thread::ThreadId,
+}
+
+impl Withdraw<'_> {
+    /// The job, if it is still on offer.
+    fn back(&self) -> Option<Job> {
+        let mut offered = lock(self.offers);
+        match &*offered {
+            Some((owner, _)) if *owner == self.me => offered.take().map(|(_, job)| job),
+            _ => None,
+        }
+    }
+}
+
+impl Drop for Withdraw<'_> {
+    fn drop(&mut self) {
+        if self.back().is_none() {
+            self.latch.wait();
+        }
+    }
+}
+
+/// The result a job of [`offer_in`] left, its panic resumed.
+fn take_result<RB>(slot: &std::sync::Mutex<Option<std::thread::Result<RB>>>) -> RB {
+    lock(slot)
+        .take()
+        .expect("the job has run")
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+}
+
 /// The second core's thread: started at the first task given to a second core and kept for the
 /// process, so that a task costs a wake-up (about 40 µs here) instead of a thread's start
 /// (its stack, its thread-local state and a clone, paid by the caller): whole process 0.95-0.99
@@ -620,6 +743,92 @@ mod tests {
             },
         );
         assert!(busy);
+    }
+
+    /// An offer taken at a pause runs on the thread that paused, while `a` still runs here, and
+    /// its result comes back here in order; one not taken runs here after `a`.
+    #[test]
+    fn an_offer_runs_where_it_is_taken_else_here() {
+        let caller = std::thread::current().id();
+        let offers: Offers = std::sync::Mutex::new(None);
+        let (offered, pause) = std::sync::mpsc::channel::<()>();
+        let (ran, wait_ran) = std::sync::mpsc::channel::<()>();
+        let (a_saw_b, (value, thread), taker) = std::thread::scope(|scope| {
+            let offers = &offers;
+            let taker = scope.spawn(move || {
+                pause.recv().expect("the offer is made");
+                take_offer_from(offers);
+                std::thread::current().id()
+            });
+            let (a_saw_b, b) = offer_in(
+                offers,
+                || {
+                    offered.send(()).expect("the taker waits");
+                    wait_ran.recv().is_ok()
+                },
+                move || {
+                    let _ = ran.send(());
+                    (6 * 7, std::thread::current().id())
+                },
+            );
+            (a_saw_b, b, taker.join().expect("the taker ends"))
+        });
+        assert!(a_saw_b);
+        assert_eq!(value, 42);
+        assert_eq!(thread, taker);
+        assert_ne!(thread, caller);
+        assert!(lock(&offers).is_none());
+        // Nobody pauses: `b` runs here, after `a`.
+        let order = std::sync::Mutex::new(Vec::new());
+        let ((), thread) = offer_in(
+            &offers,
+            || lock(&order).push("a"),
+            || {
+                lock(&order).push("b");
+                std::thread::current().id()
+            },
+        );
+        assert_eq!(thread, caller);
+        assert_eq!(*lock(&order), ["a", "b"]);
+        assert!(lock(&offers).is_none());
+    }
+
+    /// A panic in `a` takes the offer back unrun; a panic in `b`, run by the thread that took
+    /// it, is resumed here; the slot is empty after either.
+    #[test]
+    fn panics_on_either_side_of_an_offer_end_here() {
+        let offers: Offers = std::sync::Mutex::new(None);
+        let b_ran = std::sync::atomic::AtomicBool::new(false);
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            offer_in(
+                &offers,
+                || panic!("a panics"),
+                || b_ran.store(true, std::sync::atomic::Ordering::SeqCst),
+            )
+        }));
+        assert!(result.is_err());
+        assert!(!b_ran.load(std::sync::atomic::Ordering::SeqCst));
+        assert!(lock(&offers).is_none());
+        let (offered, pause) = std::sync::mpsc::channel::<()>();
+        let result = std::thread::scope(|scope| {
+            let offers = &offers;
+            let taker = scope.spawn(move || {
+                pause.recv().expect("the offer is made");
+                take_offer_from(offers);
+            });
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                offer_in(
+                    offers,
+                    || {
+                        offered.send(()).expect("the taker waits");
+                        taker.join().expect("the job catches its panic");
+                    },
+                    || -> u32 { panic!("b panics") },
+                )
+            }))
+        });
+        assert!(result.is_err());
+        assert!(lock(&offers).is_none());
     }
 
     /// A task left for the idle time runs once [`ahead`]'s work is done and lets it start, on

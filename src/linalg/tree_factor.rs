@@ -240,8 +240,9 @@ impl FactorSplit {
     /// [`TreeSplit::solve_in_place`] read them) for `a_lower`, A's lower triangle in the
     /// factor's own order: LLᴴ, or for [`Kind::Ldlt`] the LDLᴴ without pivoting (each pivot on
     /// its supernode's diagonal, L's entries below it; `Err` on a zero pivot). The sides run
-    /// side by side where `two_cores`, else one after the other; the values are the same either
-    /// way.
+    /// side by side where `two_cores` ([`super::parallel::join_or_offer`]: side 1 offered to the
+    /// second core where it is busy building ahead), else one after the other; the values are
+    /// the same either way.
     pub fn factorize<T: Entry, I: Index>(
         &self,
         kind: Kind,
@@ -291,7 +292,10 @@ impl FactorSplit {
         let SplitRoom { work, room } = room;
         let [work0, work1] = work;
         let (done0, done1) = if two_cores {
-            super::parallel::join(|| side(0, work0, &mut Vec::new()), || side(1, work1, room))
+            super::parallel::join_or_offer(
+                || side(0, work0, &mut Vec::new()),
+                || side(1, work1, room),
+            )
         } else {
             let done0 = side(0, work0, &mut Vec::new());
             (done0, side(1, work1, room))

@@ -79,7 +79,11 @@ pub struct Certifier3 {
 
 impl Certifier3 {
     pub fn new(problem: &Problem3) -> Self {
+        // Built ahead on the second core: between its steps, a pause for a factorization's
+        // side on offer ([`crate::linalg::parallel::take_offer`]).
+        let pause = crate::linalg::parallel::take_offer;
         let entries = problem.upper();
+        pause();
         let dim = problem.dim();
         let n1 = problem.n - 1;
         let lambda_at = entries
@@ -101,6 +105,7 @@ impl Certifier3 {
             }
         }
         let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
+        pause();
         let order = group_ordering(problem.pose_rank(), &problem.row_pose());
         // Assembled in its elimination order, so that no factorization copies it into that order.
         // Supernodal: S's 3x3 blocks per pose make dense blocks pay off where faer's flop rule
@@ -108,11 +113,13 @@ impl Certifier3 {
         // 0.94 (cubicle) on every public 3D file.
         let layout = Layout::Supernodal;
         let assembly = Assembly::<f64>::permuted(dim, &pattern, &order, layout.stored_side());
+        pause();
         let mut factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
             layout.stored_side(),
             layout,
         );
+        pause();
         factor.prepare_factor_split(SPLIT_FACTOR_MIN_WORK);
         let mut row_counts = vec![0; dim];
         for (&count, &row) in factor.row_counts().iter().zip(&order) {
