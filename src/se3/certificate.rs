@@ -104,15 +104,25 @@ impl Certifier3 {
                 diagonal[r] = k;
             }
         }
-        let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
         pause();
+        // S's rows, pose by pose in the poses' fill-reducing order, each pose's in its own order
+        // (translation, then Y's rows): `order[new] = row`.
         let order = group_ordering(problem.pose_rank(), &problem.row_pose());
-        // Assembled in its elimination order, so that no factorization copies it into that order.
-        // Supernodal: S's 3x3 blocks per pose make dense blocks pay off where faer's flop rule
-        // chose simplicial; whole process, 11 interleaved pairs new/old, 0.62 (tinyGrid3D) to
-        // 0.94 (cubicle) on every public 3D file.
+        // Assembled in that elimination order, so that no factorization copies it into that
+        // order. Supernodal: S's 3x3 blocks per pose make dense blocks pay off where faer's flop
+        // rule chose simplicial; whole process, 11 interleaved pairs new/old, 0.62 (tinyGrid3D)
+        // to 0.94 (cubicle) on every public 3D file. Q's entries ([`Problem3::upper`]) are its
+        // pairs' dense 4x4 blocks (3 rows for the anchor, without a translation), pair by pair
+        // and row by row, so the blocked assembly (pose u's coordinates its rows in their order,
+        // one sort of the pairs instead of one of the entries) takes them in the same order and
+        // gives the same matrix, entry for entry, as the entrywise one would.
         let layout = Layout::Supernodal;
-        let assembly = Assembly::<f64>::permuted(dim, &pattern, &order, layout.stored_side());
+        let sizes: Vec<usize> = (0..problem.n)
+            .map(|u| if u == problem.anchor { 3 } else { 4 })
+            .collect();
+        let poses = group_ordering(problem.pose_rank(), &(0..problem.n).collect::<Vec<_>>());
+        let assembly =
+            Assembly::<f64>::blocked(&sizes, &problem.pairs, &poses, layout.stored_side());
         pause();
         let mut factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
@@ -712,4 +722,53 @@ fn cholesky_positive(m: &[f64], k: usize) -> bool {
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::se3::problem::weights3;
+    use crate::simulate::space::{SpaceConfig, World3, simulate3};
+    use crate::simulate::{RotationNoise, TranslationNoise};
+
+    /// The certificate's blocked assembly against the entrywise one ([`Assembly::permuted`] of
+    /// Q's entries, [`Problem3::upper`], in the rows' elimination order): the same pattern and,
+    /// filled with the same values, the same matrix bit for bit, wherever the anchor is (its
+    /// block has no translation row).
+    #[test]
+    fn the_blocked_assembly_is_the_entrywise_one() {
+        for (seed, anchor) in [(1, 0), (2, 13), (3, 26)] {
+            let graph = simulate3(&SpaceConfig {
+                world: World3::Grid,
+                n: 27,
+                side: 6.0,
+                loop_probability: 0.5,
+                rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
+                translation_noise: TranslationNoise::Gaussian { sigma: 0.1 },
+                seed,
+            })
+            .graph;
+            let weights = weights3(&graph, false).unwrap();
+            let problem = Problem3::new(&graph, &weights, anchor);
+            let mut certifier = Certifier3::new(&problem);
+            let entries = problem.upper();
+            let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
+            let order = group_ordering(problem.pose_rank(), &problem.row_pose());
+            let side = Layout::Supernodal.stored_side();
+            let mut entrywise = Assembly::<f64>::permuted(problem.dim(), &pattern, &order, side);
+            let blocked = certifier.assembly.matrix.symbolic();
+            let by_entry = entrywise.matrix.symbolic();
+            assert_eq!(blocked.col_ptr(), by_entry.col_ptr());
+            assert_eq!(blocked.row_idx(), by_entry.row_idx());
+            // Values that tell every entry apart.
+            let values: Vec<f64> = (0..entries.len()).map(|k| 1.0 + k as f64 / 7.0).collect();
+            entrywise.fill(&values);
+            certifier.assembly.fill(&values);
+            let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(certifier.assembly.matrix.val()),
+                bits(entrywise.matrix.val())
+            );
+        }
+    }
 }
