@@ -108,40 +108,56 @@ fn beside<RA, RB: Send>(a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send) -
             (ra, rb)
         });
     };
-    let slot: std::sync::Mutex<Option<std::thread::Result<RB>>> = std::sync::Mutex::new(None);
+    let slot = std::sync::Mutex::new(None);
     let latch = std::sync::Arc::new(Latch::default());
-    let job: Box<dyn FnOnce() + Send + '_> = Box::new({
-        let (slot, latch) = (&slot, latch.clone());
-        move || {
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(b));
-            *lock(slot) = Some(result);
-            // Free before the caller hears of it, so that its next task finds the thread free;
-            // `slot` is not touched after the latch opens.
-            worker.release();
-            latch.open();
-        }
-    });
-    // SAFETY: the job borrows `b`'s captures and `slot`, which live until this function
-    // returns, and this function does not return (nor unwind past them) before the job has run
-    // and opened the latch: `wait` below waits for it, also while `a` panics.
-    let job: Job = unsafe {
-        std::mem::transmute::<Box<dyn FnOnce() + Send + '_>, Box<dyn FnOnce() + Send + 'static>>(
-            job,
-        )
-    };
+    // Free before the caller hears of it, so that its next task finds the thread free.
+    // SAFETY: this function does not return (nor unwind past `b`'s captures and `slot`) before
+    // the job has run and opened the latch: `wait` below waits for it, also while `a` panics.
+    let job = unsafe { erased_job(b, &slot, latch.clone(), || worker.release()) };
     worker.give(job);
     let wait = WaitOnDrop(&latch);
     let ra = a();
     drop(wait);
-    let rb = lock(&slot)
-        .take()
-        .expect("the job has run")
-        .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-    (ra, rb)
+    (ra, take_result(&slot))
 }
 
-/// A job for the second core's thread, its lifetime erased by [`beside`].
+/// A job for another thread, its lifetime erased ([`erased_job`]).
 type Job = Box<dyn FnOnce() + Send + 'static>;
+
+/// The job that runs `b`, leaves its result (or its panic) in `slot`, calls `then` and opens
+/// `latch` (shared: the thread that runs the job still holds it while it opens it), its
+/// lifetime erased for another thread; `slot` is not touched after the latch opens.
+///
+/// # Safety
+/// The job borrows `b`'s captures, `slot` and `then`'s: the caller keeps them alive until the
+/// latch has opened, or the job has been dropped unrun.
+unsafe fn erased_job<'a, RB: Send + 'a>(
+    b: impl FnOnce() -> RB + Send + 'a,
+    slot: &'a std::sync::Mutex<Option<std::thread::Result<RB>>>,
+    latch: std::sync::Arc<Latch>,
+    then: impl FnOnce() + Send + 'a,
+) -> Job {
+    let job: Box<dyn FnOnce() + Send + 'a> = Box::new(move || {
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(b));
+        *lock(slot) = Some(result);
+        then();
+        latch.open();
+    });
+    // SAFETY: the caller's contract.
+    unsafe {
+        std::mem::transmute::<Box<dyn FnOnce() + Send + 'a>, Box<dyn FnOnce() + Send + 'static>>(
+            job,
+        )
+    }
+}
+
+/// The result a job of [`erased_job`] left, its panic resumed.
+fn take_result<RB>(slot: &std::sync::Mutex<Option<std::thread::Result<RB>>>) -> RB {
+    lock(slot)
+        .take()
+        .expect("the job has run")
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+}
 
 /// `(a(), b())` as [`join`], and where the second core is busy with work built [`ahead`], `b`
 /// offered to it instead of waiting for it: that work takes the offer at its next pause
@@ -189,25 +205,12 @@ fn offer_in<RA, RB: Send>(
     a: impl FnOnce() -> RA,
     b: impl FnOnce() -> RB + Send,
 ) -> (RA, RB) {
-    let slot: std::sync::Mutex<Option<std::thread::Result<RB>>> = std::sync::Mutex::new(None);
-    // Shared: the thread that runs the job still holds it while it opens it.
+    let slot = std::sync::Mutex::new(None);
     let latch = std::sync::Arc::new(Latch::default());
-    let job: Box<dyn FnOnce() + Send + '_> = Box::new({
-        let (slot, latch) = (&slot, latch.clone());
-        move || {
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(b));
-            *lock(slot) = Some(result);
-            latch.open();
-        }
-    });
-    // SAFETY: the job borrows `b`'s captures and `slot`, which live until this function
-    // returns; before it returns (or unwinds past them) the job is either taken back unrun, or
-    // run, here or by the thread that took it, and waited for ([`Withdraw`]).
-    let job: Job = unsafe {
-        std::mem::transmute::<Box<dyn FnOnce() + Send + '_>, Box<dyn FnOnce() + Send + 'static>>(
-            job,
-        )
-    };
+    // SAFETY: before this function returns (or unwinds past `b`'s captures and `slot`) the job
+    // is either taken back unrun, or run, here or by the thread that took it, and waited for
+    // ([`Withdraw`]).
+    let job = unsafe { erased_job(b, &slot, latch.clone(), || ()) };
     let me = std::thread::current().id();
     let mut offered = lock(offers);
     if offered.is_some() {
@@ -256,14 +259,6 @@ impl Drop for Withdraw<'_> {
             self.latch.wait();
         }
     }
-}
-
-/// The result a job of [`offer_in`] left, its panic resumed.
-fn take_result<RB>(slot: &std::sync::Mutex<Option<std::thread::Result<RB>>>) -> RB {
-    lock(slot)
-        .take()
-        .expect("the job has run")
-        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
 }
 
 /// The second core's thread: started at the first task given to a second core and kept for the

@@ -727,9 +727,6 @@ fn cholesky_positive(m: &[f64], k: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::se3::problem::weights3;
-    use crate::simulate::space::{SpaceConfig, World3, simulate3};
-    use crate::simulate::{RotationNoise, TranslationNoise};
 
     /// The certificate's blocked assembly against the entrywise one ([`Assembly::permuted`] of
     /// Q's entries, [`Problem3::upper`], in the rows' elimination order): the same pattern and,
@@ -738,18 +735,7 @@ mod tests {
     #[test]
     fn the_blocked_assembly_is_the_entrywise_one() {
         for (seed, anchor) in [(1, 0), (2, 13), (3, 26)] {
-            let graph = simulate3(&SpaceConfig {
-                world: World3::Grid,
-                n: 27,
-                side: 6.0,
-                loop_probability: 0.5,
-                rotation_noise: RotationNoise::Gaussian { sigma: 0.1 },
-                translation_noise: TranslationNoise::Gaussian { sigma: 0.1 },
-                seed,
-            })
-            .graph;
-            let weights = weights3(&graph, false).unwrap();
-            let problem = Problem3::new(&graph, &weights, anchor);
+            let problem = crate::se3::grid_problem(seed, anchor);
             let mut certifier = Certifier3::new(&problem);
             let entries = problem.upper();
             let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();

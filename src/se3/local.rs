@@ -802,25 +802,8 @@ pub fn optimize_with(
 mod tests {
     use super::*;
     use crate::linalg::rng::Rng;
-    use crate::se3::problem::weights3;
-    use crate::simulate::space::{SpaceConfig, World3, simulate3};
-    use crate::simulate::{RotationNoise, TranslationNoise};
 
-    /// The problem of a noisy 27-pose grid (seed `seed`), anchored at pose `anchor`.
-    fn grid(seed: u64, anchor: usize) -> Problem3 {
-        let graph = simulate3(&SpaceConfig {
-            world: World3::Grid,
-            n: 27,
-            side: 6.0,
-            loop_probability: 0.3,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
-            seed,
-        })
-        .graph;
-        let weights = weights3(&graph, false).unwrap();
-        Problem3::new(&graph, &weights, anchor)
-    }
+    use crate::se3::grid_problem as grid;
 
     /// A random point of St(3, p)^n × ℝ^{p(n−1)} (normal entries, each rotation block's rows
     /// made orthonormal), with QX and the poses' tangent bases there.

@@ -505,3 +505,23 @@ pub fn rt_of(pose: &crate::graph3::Pose3) -> Rt {
         t: pose.translation,
     }
 }
+
+/// The problem of a noisy 27-pose grid world (seed `seed`), anchored at pose `anchor`: for the
+/// tests of the modules that take a [`Problem3`].
+#[cfg(test)]
+pub(crate) fn grid_problem(seed: u64, anchor: usize) -> Problem3 {
+    use crate::simulate::space::{SpaceConfig, World3, simulate3};
+    use crate::simulate::{RotationNoise, TranslationNoise};
+    let graph = simulate3(&SpaceConfig {
+        world: World3::Grid,
+        n: 27,
+        side: 6.0,
+        loop_probability: 0.3,
+        rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+        translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
+        seed,
+    })
+    .graph;
+    let weights = problem::weights3(&graph, false).unwrap();
+    Problem3::new(&graph, &weights, anchor)
+}
