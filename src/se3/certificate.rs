@@ -34,7 +34,7 @@
 
 use super::problem::{Point3, Problem3};
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
-use crate::linalg::factor::{Assembly, Layout, SparseFactor, group_ordering, ldlt_error_floor};
+use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
 use crate::linalg::roundoff::{U, gamma};
 
 /// What [`Certifier3::certify`] proved.
@@ -105,9 +105,8 @@ impl Certifier3 {
             }
         }
         pause();
-        // S's rows, pose by pose in the poses' fill-reducing order, each pose's in its own order
-        // (translation, then Y's rows): `order[new] = row`.
-        let order = group_ordering(problem.pose_rank(), &problem.row_pose());
+        // S's rows in their elimination order: `order[new] = row`.
+        let order = problem.row_order();
         // Assembled in that elimination order, so that no factorization copies it into that
         // order. Supernodal: S's 3x3 blocks per pose make dense blocks pay off where faer's flop
         // rule chose simplicial; whole process, 11 interleaved pairs new/old, 0.62 (tinyGrid3D)
@@ -120,9 +119,12 @@ impl Certifier3 {
         let sizes: Vec<usize> = (0..problem.n)
             .map(|u| if u == problem.anchor { 3 } else { 4 })
             .collect();
-        let poses = group_ordering(problem.pose_rank(), &(0..problem.n).collect::<Vec<_>>());
-        let assembly =
-            Assembly::<f64>::blocked(&sizes, &problem.pairs, &poses, layout.stored_side());
+        let assembly = Assembly::<f64>::blocked(
+            &sizes,
+            &problem.pairs,
+            &problem.pose_order(),
+            layout.stored_side(),
+        );
         pause();
         let mut factor = SparseFactor::analyze_in_order(
             assembly.matrix.symbolic(),
@@ -462,7 +464,7 @@ impl Certifier3 {
         let pattern: Vec<(usize, usize)> = self.entries.iter().map(|e| (e.0, e.1)).collect();
         let mut assembly = Assembly::<f64>::new(dim, &pattern);
         assembly.fill(&self.values);
-        let order = group_ordering(problem.pose_rank(), &problem.row_pose());
+        let order = problem.row_order();
         let mut factor =
             SparseFactor::analyze_ordered(assembly.matrix.symbolic(), &order, Layout::Simplicial);
         factor.ldlt(assembly.matrix.as_ref()).ok()?;
@@ -739,7 +741,7 @@ mod tests {
             let mut certifier = Certifier3::new(&problem);
             let entries = problem.upper();
             let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
-            let order = group_ordering(problem.pose_rank(), &problem.row_pose());
+            let order = problem.row_order();
             let side = Layout::Supernodal.stored_side();
             let mut entrywise = Assembly::<f64>::permuted(problem.dim(), &pattern, &order, side);
             let blocked = certifier.assembly.matrix.symbolic();

@@ -13,7 +13,7 @@
 use super::problem::{Point3, Problem3};
 use super::stiefel::{polar_rows, tangent_basis};
 use crate::linalg::block_system::BlockSystem;
-use crate::linalg::factor::{Assembly, SparseFactor, group_ordering};
+use crate::linalg::factor::{Assembly, SparseFactor};
 
 /// One step, for progress reports.
 #[derive(Debug, Clone, Copy)]
@@ -180,7 +180,7 @@ impl System {
             }
         }
         // Poses in the fill-reducing order, each pose's coordinates together.
-        let poses = group_ordering(problem.pose_rank(), &(0..n).collect::<Vec<_>>());
+        let poses = problem.pose_order();
         // Supernodal, assembled directly in its elimination order and triangle (factored without
         // a permuted copy), as the planar systems: with 6x6 pose blocks these have flop ratios of
         // 27 to 199 on the public 3D files (9 on tinyGrid3D's 9 poses). By our own code

@@ -324,6 +324,18 @@ impl Problem3 {
         }
     }
 
+    /// The poses in a fill-reducing order ([`crate::linalg::factor::group_ordering`] by
+    /// [`Problem3::pose_rank`]): the block order of the Newton systems and the certificate.
+    pub fn pose_order(&self) -> Vec<usize> {
+        crate::linalg::factor::group_ordering(self.pose_rank(), &(0..self.n).collect::<Vec<_>>())
+    }
+
+    /// The rows in a fill-reducing order, each pose's together in their own order (translation,
+    /// then Y's rows): `order[new] = row`, [`Problem3::pose_order`] expanded to the rows.
+    pub fn row_order(&self) -> Vec<usize> {
+        crate::linalg::factor::group_ordering(self.pose_rank(), &self.row_pose())
+    }
+
     /// The pose of each row.
     pub fn row_pose(&self) -> Vec<usize> {
         let mut g = vec![0; self.dim()];

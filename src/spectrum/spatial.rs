@@ -51,7 +51,6 @@ use super::{SPARSE_DEFAULT_COUNT, SPARSE_MAX_COUNT, smallest};
 use crate::certify::szep::ZERO_FACTOR;
 use crate::error::Error;
 use crate::graph3::Graph3;
-use crate::linalg::factor::group_ordering;
 use crate::linalg::subspace::{Pencil, SubspaceOptions, smallest_eigenvalues};
 use crate::problem::weights::Weights;
 use crate::se3::problem::{Problem3, weights3};
@@ -259,7 +258,7 @@ pub fn sparse_spectra3(
             (r, c, v)
         })
         .collect();
-    let order = group_ordering(problem.pose_rank(), &problem.row_pose());
+    let order = problem.row_order();
     let options = SubspaceOptions::default();
     let q_form = |z: &Mat<c64>| edge_form3(problem, None, z);
     let s_form = |z: &Mat<c64>| edge_form3(problem, Some(lambda), z);
