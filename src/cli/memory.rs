@@ -40,6 +40,42 @@ pub fn tune() {
     }
 }
 
+/// Heap bytes mapped ahead per byte of the input ([`map_heap_ahead`]). The first thread of a solve
+/// writes fresh heap pages of 6 to 10 times its input's size on the planar files (MIT 6.3, M3500
+/// 6.7, city10000 9.5), 9 to 13 times on the 3D ones (smallGrid3D 9.1, sphere_bignoise_vertex3
+/// 12.9).
+const AHEAD_PER_INPUT_BYTE: u64 = 8;
+
+/// The smallest input whose heap [`map_heap_ahead`] maps: below, graphs of a few hundred edges
+/// at most, solved in a few milliseconds (under 50 edges on one core,
+/// [`crate::linalg::parallel::SHARED_FROM_EDGES`], where starting the second core's thread for
+/// this alone would cost more than it saves).
+const AHEAD_FROM_BYTES: u64 = 64 << 10;
+
+/// Has the second core map the heap pages that the solve will write first
+/// ([`crate::linalg::heap::map_top_ahead`]), [`AHEAD_PER_INPUT_BYTE`] per byte of the input
+/// file, while this thread reads it: the pages' faults leave the first thread's path. An input
+/// read from stdin, or smaller than [`AHEAD_FROM_BYTES`], maps nothing. Whole process, against
+/// no mapping ahead (21 to 31 interleaved pairs): kitti_08 0.91, city10000 0.94, M3500c 0.97,
+/// parking-garage, ais2klinik, kitti_00, manhattan and torus3D 0.98, M3500, sphere2500 and
+/// sphere_bignoise_vertex3 0.98-0.99, cubicle, MIT, CSAIL and smallGrid3D 0.99, intel 1.01
+/// (the same bytes out on the 46 public files). Mapping 4 bytes per byte of input gained as
+/// much on the planar files and nothing on the 3D ones; 12 and 16 lost 2-6% on kitti_00 and
+/// city10000 (the pages beyond the solve's own are mapped first); the second core's own heap
+/// mapped ahead as well delayed its first tasks (M3500 1.01).
+pub fn map_heap_ahead(input: &str) {
+    if input == "-" {
+        return;
+    }
+    let Ok(meta) = std::fs::metadata(input) else {
+        return;
+    };
+    if meta.is_file() && meta.len() >= AHEAD_FROM_BYTES {
+        let bytes = meta.len().saturating_mul(AHEAD_PER_INPUT_BYTE);
+        crate::linalg::heap::map_top_ahead(usize::try_from(bytes).unwrap_or(usize::MAX));
+    }
+}
+
 /// The peak resident memory (KiB) from which [`release_beside`] gives the free pages back. Below
 /// it the second core's wake-up and the trim's locks cost more than the exit saves: MIT (8.4 MiB
 /// peak, 2.3 MB free in the heaps) 1.015x slower whole process, intel (12 MiB) 0.99.

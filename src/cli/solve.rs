@@ -415,6 +415,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let rec = args.rerun.recorder("pgo-solve")?;
     let progress = args.progress.start("pgo-solve");
     let t0 = Instant::now();
+    super::memory::map_heap_ahead(&args.input.input);
     let (graph, mut read_report) = args.input.read_any_shown(&progress)?;
     let read_s = t0.elapsed().as_secs_f64();
     let graph = match graph {

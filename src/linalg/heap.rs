@@ -1,5 +1,7 @@
 //! The allocator's memory between the phases of a solve: free pages given back to the system
-//! ([`release_free_memory`], [`release_for`]), and a factor's room mapped ahead ([`Room`]).
+//! ([`release_free_memory`], [`release_for`]), a factor's room mapped ahead ([`Room`]), and the
+//! top of the heap mapped ahead by the second core while a tool reads its input
+//! ([`map_top_ahead`]).
 //!
 //! A Newton step at 10⁶ poses allocates and frees vectors of 8 to 31 MB (the trial point, the
 //! gradient and its coordinates, the positions' right-hand side); glibc's malloc keeps such
@@ -14,6 +16,8 @@
 /// memory stays the allocator's: a later block placed there takes fresh pages (a page fault at
 /// each first write).
 pub fn release_free_memory() {
+    // What is left to map ahead would map again what is given back here.
+    crate::linalg::parallel::drop_background();
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim works under malloc's own locks on its own free chunks; it reads and
     // writes no memory of ours.
@@ -32,6 +36,76 @@ pub const RELEASE_FROM_ROWS: usize = 1 << 20;
 pub fn release_for(rows: usize) {
     if rows >= RELEASE_FROM_ROWS {
         release_free_memory();
+    }
+}
+
+/// The most bytes [`map_top_ahead`] maps: half the tools' mmap threshold (`cli::memory`), so
+/// that its block comes from the heap and stays there once freed.
+pub const TOP_AHEAD_MAX: usize = 16 << 20;
+
+/// Bytes mapped per background task of [`map_top_ahead`]: 32 pages, about 40 µs, the longest
+/// that a job given to the second core meanwhile waits.
+const TOP_CHUNK: usize = 32 * 4096;
+
+/// Maps the next `bytes` (at most [`TOP_AHEAD_MAX`]) of the allocator's heap on the second core
+/// in the background ([`crate::linalg::parallel::in_background`]), for this thread to allocate
+/// and write later: every fresh page costs a page fault at its first write (about 1.2 µs here,
+/// 1.0 µs mapped by `madvise(MADV_POPULATE_WRITE)`), and a tool's second core is idle while its
+/// first thread reads the input. A block of `bytes` is allocated and freed at once: it becomes
+/// the free top of malloc's heap, which the tools keep mapped (`cli::memory`) and from which
+/// this thread's next blocks are carved, from its start up, while the second core maps it from
+/// its end down, chunk by chunk. Mapping writes nothing: a page it maps is the zero page a
+/// first write would fault in, and a page mapped already is left as it is, so this thread may
+/// allocate and write there meanwhile. For the tools' processes, whose allocator settings keep
+/// the block in the heap (in a library's host it may be mapped and unmapped on its own, and
+/// the mapping would then find nothing to map). Linux with glibc (the system call from 5.14:
+/// older kernels refuse it and nothing is mapped); elsewhere, or on one core, nothing.
+pub fn map_top_ahead(bytes: usize) {
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    let _ = bytes;
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        let bytes = bytes.min(TOP_AHEAD_MAX);
+        if bytes == 0 || !crate::linalg::parallel::second_core() {
+            return;
+        }
+        // SAFETY: a block allocated and freed at once; only its address is kept, to map pages
+        // there without reading or writing them.
+        let start = unsafe {
+            let block = libc::malloc(bytes);
+            if block.is_null() {
+                return;
+            }
+            libc::free(block);
+            block as usize
+        };
+        let chunks = bytes.div_ceil(TOP_CHUNK);
+        crate::linalg::parallel::in_background((0..chunks).rev().map(move |c| {
+            let from = start + c * TOP_CHUNK;
+            let to = (from + TOP_CHUNK).min(start + bytes);
+            Box::new(move || populate(from, to)) as Box<dyn FnOnce() + Send>
+        }));
+    }
+}
+
+/// Maps the whole pages of the address range [from, to) for writing without writing them
+/// (`MADV_POPULATE_WRITE`); pages mapped already stay as they are. A refusal (an old kernel, a
+/// range no longer mapped) maps nothing.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn populate(from: usize, to: usize) {
+    const PAGE: usize = 4096;
+    let (first, end) = (from.next_multiple_of(PAGE), to / PAGE * PAGE);
+    if end > first {
+        // SAFETY: madvise changes no memory contents: it faults in pages of the calling
+        // process's own mappings (private anonymous ones here: zero pages) as a first write
+        // would, and fails without effect where there is no mapping.
+        unsafe {
+            libc::madvise(
+                first as *mut libc::c_void,
+                end - first,
+                libc::MADV_POPULATE_WRITE,
+            );
+        }
     }
 }
 
@@ -164,6 +238,42 @@ impl Room {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Mapping pages ahead writes nothing: values written before stay (pages mapped already),
+    /// fresh memory stays zero (pages mapped by it), over ranges that start and end inside
+    /// pages; and values written by another thread while the same pages are mapped, chunk by
+    /// chunk from the end down as [`map_top_ahead`] maps them, are all there after.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn mapping_ahead_writes_nothing() {
+        let value = |k: usize| (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        let written: Vec<u64> = (0..300_000).map(value).collect();
+        let fresh = vec![0u64; 300_000];
+        for values in [&written, &fresh] {
+            let from = values.as_ptr() as usize;
+            let to = from + values.len() * 8;
+            populate(from + 100, to - 100);
+            populate(from, to);
+        }
+        assert!(fresh.iter().all(|&v| v == 0));
+        assert!(written.iter().enumerate().all(|(k, &v)| v == value(k)));
+        for _ in 0..4 {
+            let mut raced = vec![0u64; 1 << 20];
+            let (from, bytes) = (raced.as_ptr() as usize, raced.len() * 8);
+            std::thread::scope(|scope| {
+                scope.spawn(|| {
+                    for (k, v) in raced.iter_mut().enumerate() {
+                        *v = value(k);
+                    }
+                });
+                for c in (0..bytes.div_ceil(TOP_CHUNK)).rev() {
+                    let at = from + c * TOP_CHUNK;
+                    populate(at, (at + TOP_CHUNK).min(from + bytes));
+                }
+            });
+            assert!(raced.iter().enumerate().all(|(k, &v)| v == value(k)));
+        }
+    }
 
     /// The room's values (zeros) come back whole whichever thread maps which chunks; a room
     /// taken or forgone before it is prepared stays empty.

@@ -280,6 +280,8 @@ struct WorkerState {
     busy: bool,
     /// A solver has let the tasks left by [`when_idle`] start ([`let_idle_tasks_start`]).
     idle_ready: bool,
+    /// The tasks left by [`in_background`], the next one first.
+    background: std::collections::VecDeque<Job>,
 }
 
 /// Locks a mutex whatever a panicking holder left (the data here stay consistent).
@@ -291,7 +293,6 @@ fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// the process that started it: a process forked from it (Python's multiprocessing, say) has
 /// not the thread, and gives its tasks threads of their own.
 fn worker() -> Option<&'static Worker> {
-    static WORKER: OnceLock<Option<(u32, &'static Worker)>> = OnceLock::new();
     if !second_core() {
         return None;
     }
@@ -312,6 +313,15 @@ fn worker() -> Option<&'static Worker> {
     (process == std::process::id()).then_some(worker)
 }
 
+/// The second core's thread once started ([`worker`]), in this process.
+static WORKER: OnceLock<Option<(u32, &'static Worker)>> = OnceLock::new();
+
+/// The second core's thread if it has been started in this process; `None` without starting it.
+fn started_worker() -> Option<&'static Worker> {
+    let (process, worker) = (*WORKER.get()?)?;
+    (process == std::process::id()).then_some(worker)
+}
+
 impl Worker {
     /// Runs the jobs given, and the idle tasks once they may start, for the process's life.
     fn serve(&self) {
@@ -327,11 +337,18 @@ impl Worker {
                         state.busy = true;
                         break None;
                     }
+                    // A background task leaves the thread free: a job given meanwhile waits
+                    // for that task's end only.
+                    if !state.busy
+                        && let Some(task) = state.background.pop_front()
+                    {
+                        break Some(task);
+                    }
                     state = self.wake.wait(state).unwrap_or_else(|p| p.into_inner());
                 }
             };
             match job {
-                // The job frees the thread itself ([`beside`]).
+                // A job frees the thread itself ([`beside`]); a background task never took it.
                 Some(job) => job(),
                 None => {
                     run_idle_runners();
@@ -358,10 +375,46 @@ impl Worker {
         lock(&self.state).busy = false;
     }
 
+    /// Leaves background tasks ([`in_background`]), each one's panic caught and dropped.
+    fn leave(&self, tasks: impl IntoIterator<Item = Box<dyn FnOnce() + Send + 'static>>) {
+        lock(&self.state)
+            .background
+            .extend(tasks.into_iter().map(|task| -> Job {
+                Box::new(move || {
+                    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(task));
+                })
+            }));
+        self.wake.notify_one();
+    }
+
+    /// Drops the background tasks not started.
+    fn drop_left(&self) {
+        lock(&self.state).background.clear();
+    }
+
     /// Lets the idle tasks start once the thread is free.
     fn idle_ready(&self) {
         lock(&self.state).idle_ready = true;
         self.wake.notify_one();
+    }
+}
+
+/// Leaves `tasks` to the second core's thread, to run one after the other whenever it has no
+/// job ([`join`], [`ahead`]) and no [`when_idle`] tasks to run: work worth doing only with a
+/// core to spare, each task short, since a job given meanwhile waits for the task in progress.
+/// Nobody waits for them: on one core (or in a process forked without the thread) they are
+/// dropped unrun, as are those still left at [`drop_background`]. A panicking task is caught
+/// and dropped. Each must leave every result the same whether it runs or not.
+pub fn in_background(tasks: impl IntoIterator<Item = Box<dyn FnOnce() + Send + 'static>>) {
+    if let Some(worker) = worker() {
+        worker.leave(tasks);
+    }
+}
+
+/// Drops the tasks that [`in_background`] left and the second core has not started.
+pub fn drop_background() {
+    if let Some(worker) = started_worker() {
+        worker.drop_left();
     }
 }
 
@@ -948,6 +1001,62 @@ mod tests {
             second_core(),
             std::thread::available_parallelism().is_ok_and(|c| c.get() > 1)
         );
+    }
+
+    /// Background tasks run on the second core's thread one after the other, in the order left;
+    /// a job given while one runs finds the thread free to claim and runs there next (not on a
+    /// thread of its own); a task that panics does not stop the next; tasks dropped before they
+    /// start never run. On a worker of the test's own, so that no other test's tasks mix in.
+    #[test]
+    fn background_tasks_run_in_order_between_jobs_until_dropped() {
+        let worker: &'static Worker = Box::leak(Box::new(Worker {
+            state: std::sync::Mutex::new(WorkerState::default()),
+            wake: std::sync::Condvar::new(),
+        }));
+        // The thread serves for the rest of the test process.
+        let served_by = std::thread::spawn(|| worker.serve()).thread().id();
+        let (ran, heard) = std::sync::mpsc::channel::<(&'static str, std::thread::ThreadId)>();
+        let next = || {
+            heard
+                .recv_timeout(std::time::Duration::from_secs(20))
+                .expect("a task ran")
+        };
+        let task = |name: &'static str| -> Box<dyn FnOnce() + Send> {
+            let ran = ran.clone();
+            Box::new(move || ran.send((name, std::thread::current().id())).unwrap())
+        };
+        let gate = || -> (std::sync::mpsc::Sender<()>, Box<dyn FnOnce() + Send>) {
+            let (open, wait) = std::sync::mpsc::channel::<()>();
+            let ran = ran.clone();
+            let task = Box::new(move || {
+                ran.send(("gate", std::thread::current().id())).unwrap();
+                wait.recv().unwrap();
+            });
+            (open, task)
+        };
+        let (open, first) = gate();
+        let panics: Box<dyn FnOnce() + Send> = Box::new(|| panic!("a background task that panics"));
+        worker.leave([first, task("1"), task("2"), panics, task("4")]);
+        assert_eq!(next(), ("gate", served_by));
+        assert!(worker.claim(), "a background task leaves the thread free");
+        worker.give({
+            let ran = ran.clone();
+            Box::new(move || {
+                ran.send(("job", std::thread::current().id())).unwrap();
+                worker.release();
+            })
+        });
+        open.send(()).unwrap();
+        for name in ["job", "1", "2", "4"] {
+            assert_eq!(next(), (name, served_by));
+        }
+        let (open, second) = gate();
+        worker.leave([second, task("dropped"), task("dropped too")]);
+        assert_eq!(next().0, "gate");
+        worker.drop_left();
+        worker.leave([task("after")]);
+        open.send(()).unwrap();
+        assert_eq!(next(), ("after", served_by));
     }
 
     /// A panic on the second thread reaches the caller.
