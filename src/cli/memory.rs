@@ -52,10 +52,18 @@ const AHEAD_PER_INPUT_BYTE: u64 = 8;
 /// this alone would cost more than it saves).
 const AHEAD_FROM_BYTES: u64 = 64 << 10;
 
+/// The largest input whose heap [`map_heap_ahead`] maps. Above it the most that is mapped
+/// ([`crate::linalg::heap::TOP_AHEAD_MAX`]) is a small share of the solve's memory, whose
+/// large blocks are mapped on their own, and it may stay unused: at 10⁶ poses (233 MB) the peak
+/// grew from 1899-1907 MiB to 1898-1936 MiB (three runs each), the time the same within the
+/// spread (12.5-12.9 s against 12.7-13.2 s); at 10⁵ poses (23 MB) 0.98 of the time (11
+/// interleaved pairs), the peak 4 MiB higher.
+const AHEAD_UP_TO_BYTES: u64 = 32 << 20;
+
 /// Has the second core map the heap pages that the solve will write first
 /// ([`crate::linalg::heap::map_top_ahead`]), [`AHEAD_PER_INPUT_BYTE`] per byte of the input
 /// file, while this thread reads it: the pages' faults leave the first thread's path. An input
-/// read from stdin, or smaller than [`AHEAD_FROM_BYTES`], maps nothing. Whole process, against
+/// read from stdin, or outside [`AHEAD_FROM_BYTES`]..=[`AHEAD_UP_TO_BYTES`], maps nothing. Whole process, against
 /// no mapping ahead (21 to 31 interleaved pairs): kitti_08 0.91, city10000 0.94, M3500c 0.97,
 /// parking-garage, ais2klinik, kitti_00, manhattan and torus3D 0.98, M3500, sphere2500 and
 /// sphere_bignoise_vertex3 0.98-0.99, cubicle, MIT, CSAIL and smallGrid3D 0.99, intel 1.01
@@ -70,7 +78,7 @@ pub fn map_heap_ahead(input: &str) {
     let Ok(meta) = std::fs::metadata(input) else {
         return;
     };
-    if meta.is_file() && meta.len() >= AHEAD_FROM_BYTES {
+    if meta.is_file() && (AHEAD_FROM_BYTES..=AHEAD_UP_TO_BYTES).contains(&meta.len()) {
         let bytes = meta.len().saturating_mul(AHEAD_PER_INPUT_BYTE);
         crate::linalg::heap::map_top_ahead(usize::try_from(bytes).unwrap_or(usize::MAX));
     }
