@@ -63,14 +63,15 @@ const AHEAD_UP_TO_BYTES: u64 = 32 << 20;
 /// Has the second core map the heap pages that the solve will write first
 /// ([`crate::linalg::heap::map_top_ahead`]), [`AHEAD_PER_INPUT_BYTE`] per byte of the input
 /// file, while this thread reads it: the pages' faults leave the first thread's path. An input
-/// read from stdin, or outside [`AHEAD_FROM_BYTES`]..=[`AHEAD_UP_TO_BYTES`], maps nothing. Whole process, against
-/// no mapping ahead (21 to 31 interleaved pairs): kitti_08 0.91, city10000 0.94, M3500c 0.97,
-/// parking-garage, ais2klinik, kitti_00, manhattan and torus3D 0.98, M3500, sphere2500 and
-/// sphere_bignoise_vertex3 0.98-0.99, cubicle, MIT, CSAIL and smallGrid3D 0.99, intel 1.01
-/// (the same bytes out on the 46 public files). Mapping 4 bytes per byte of input gained as
-/// much on the planar files and nothing on the 3D ones; 12 and 16 lost 2-6% on kitti_00 and
-/// city10000 (the pages beyond the solve's own are mapped first); the second core's own heap
-/// mapped ahead as well delayed its first tasks (M3500 1.01).
+/// read from stdin, smaller than [`AHEAD_FROM_BYTES`] or larger than [`AHEAD_UP_TO_BYTES`],
+/// maps nothing. Whole process, against no mapping ahead (21 to 31 interleaved pairs): kitti_08
+/// 0.91, city10000 0.94, M3500c 0.97, parking-garage, ais2klinik, kitti_00, manhattan and
+/// torus3D 0.98, M3500, sphere2500 and sphere_bignoise_vertex3 0.98-0.99, cubicle, MIT, CSAIL
+/// and smallGrid3D 0.99, intel 1.01 (the same bytes out on the 46 public files). Mapping 4
+/// bytes per byte of input gained as much on the planar files and nothing on the 3D ones; 12
+/// and 16 lost 2-6% on kitti_00 and city10000 (the pages beyond the solve's own are mapped
+/// first); the second core's own heap mapped ahead as well delayed its first tasks (M3500
+/// 1.01).
 pub fn map_heap_ahead(input: &str) {
     if input == "-" {
         return;

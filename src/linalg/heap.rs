@@ -57,9 +57,10 @@ const TOP_CHUNK: usize = 32 * 4096;
 /// its end down, chunk by chunk. Mapping writes nothing: a page it maps is the zero page a
 /// first write would fault in, and a page mapped already is left as it is, so this thread may
 /// allocate and write there meanwhile. For the tools' processes, whose allocator settings keep
-/// the block in the heap (in a library's host it may be mapped and unmapped on its own, and
-/// the mapping would then find nothing to map). Linux with glibc (the system call from 5.14:
-/// older kernels refuse it and nothing is mapped); elsewhere, or on one core, nothing.
+/// the block in the heap: in a library's host it may be a mapping of its own, unmapped when
+/// freed, and the range then maps nothing, or the pages of whatever is mapped there next
+/// (writing nothing either way). Linux with glibc (the system call from 5.14: older kernels
+/// refuse it and nothing is mapped); elsewhere, or on one core, nothing.
 pub fn map_top_ahead(bytes: usize) {
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
     let _ = bytes;
@@ -90,7 +91,7 @@ pub fn map_top_ahead(bytes: usize) {
 
 /// Maps the whole pages of the address range [from, to) for writing without writing them
 /// (`MADV_POPULATE_WRITE`); pages mapped already stay as they are. A refusal (an old kernel, a
-/// range no longer mapped) maps nothing.
+/// range not mapped) maps nothing.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn populate(from: usize, to: usize) {
     const PAGE: usize = 4096;
