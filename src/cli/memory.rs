@@ -47,10 +47,13 @@ pub fn tune() {
 const AHEAD_PER_INPUT_BYTE: u64 = 8;
 
 /// The smallest input whose heap [`map_heap_ahead`] maps: below, graphs of a few hundred edges
-/// at most, solved in a few milliseconds (under 50 edges on one core,
-/// [`crate::linalg::parallel::SHARED_FROM_EDGES`], where starting the second core's thread for
-/// this alone would cost more than it saves).
-const AHEAD_FROM_BYTES: u64 = 64 << 10;
+/// at most, solved in a few milliseconds, where the mapping gains nothing. The same code mapping
+/// from 64 KiB against from 128 KiB (15 interleaved pairs): 125-pose generated 3D worlds of
+/// 89-91 KB 1.00 (median of 18 files, 0.98-1.03), smallGrid3D (101 KB) 1.01, MIT (121 KB)
+/// 1.00, CSAIL (128 KB) 0.99. Against the binary before the mapping, the 400-pose worlds
+/// (290-330 KB) take 0.99 of their time and the 1000-pose ones (about 750 KB) 0.98 (medians of
+/// 18 files, 7 pairs each; the same bytes out).
+const AHEAD_FROM_BYTES: u64 = 128 << 10;
 
 /// The largest input whose heap [`map_heap_ahead`] maps. Above it the most that is mapped
 /// ([`crate::linalg::heap::TOP_AHEAD_MAX`]) is a small share of the solve's memory, whose
@@ -67,7 +70,10 @@ const AHEAD_UP_TO_BYTES: u64 = 32 << 20;
 /// maps nothing. Whole process, against no mapping ahead (21 to 31 interleaved pairs): kitti_08
 /// 0.91, city10000 0.94, M3500c 0.97, parking-garage, ais2klinik, kitti_00, manhattan and
 /// torus3D 0.98, M3500, sphere2500 and sphere_bignoise_vertex3 0.98-0.99, cubicle, MIT, CSAIL
-/// and smallGrid3D 0.99, intel 1.01 (the same bytes out on the 46 public files). Mapping 4
+/// and smallGrid3D 0.99, intel 1.01 (the same bytes out on the 46 public files). A new binary's
+/// layout alone moves a small solve by a few percent (the 125-pose worlds, mapped nothing,
+/// 1.02 against the binary before): MIT, CSAIL and smallGrid3D, below [`AHEAD_FROM_BYTES`]
+/// now, gained nothing measurable from the mapping itself. Mapping 4
 /// bytes per byte of input gained as much on the planar files and nothing on the 3D ones; 12
 /// and 16 lost 2-6% on kitti_00 and city10000 (the pages beyond the solve's own are mapped
 /// first); the second core's own heap mapped ahead as well delayed its first tasks (M3500
