@@ -296,7 +296,7 @@ fn worker() -> Option<&'static Worker> {
     if !second_core() {
         return None;
     }
-    let (process, worker) = (*WORKER.get_or_init(|| {
+    WORKER.get_or_init(|| {
         if !more_than_one_cpu() {
             return None;
         }
@@ -309,8 +309,8 @@ fn worker() -> Option<&'static Worker> {
             .spawn(move || worker.serve())
             .ok()
             .map(|_| (std::process::id(), worker))
-    }))?;
-    (process == std::process::id()).then_some(worker)
+    });
+    started_worker()
 }
 
 /// The second core's thread once started ([`worker`]), in this process.

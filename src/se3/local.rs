@@ -802,7 +802,6 @@ pub fn optimize_with(
 mod tests {
     use super::*;
     use crate::linalg::rng::Rng;
-
     use crate::se3::grid_problem as grid;
 
     /// A random point of St(3, p)^n × ℝ^{p(n−1)} (normal entries, each rotation block's rows
