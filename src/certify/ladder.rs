@@ -139,7 +139,9 @@ const CEILING: f64 = 1.0 / 16.0;
 /// below 4·`error_floor` ([`crate::linalg::factor::ldlt_error_floor`]: a rung below it is hidden
 /// by the rounding whatever its inertia, one at 4·`error_floor` is likely to show the gap),
 /// unless a rung there had more than k below. (At 10⁶ poses the first shift, 1e-12, lay under a
-/// floor of 1.3e-11: its factorization, a third of the certificate's, showed nothing.) Where the
+/// floor of 1.3e-11: its factorization, a third of the certificate's, showed nothing.) Once,
+/// where a step down would land within 9/8 of the error bound the last rung measured, the
+/// log-scale middle between that bound and μ instead. Where the
 /// rounding hides the gap at the first rung with at most k: up while no rung above was tried (a
 /// first shift guessed below the rounding level, [`first_shift`]), to twice the error bound that
 /// rung showed (by 2 to 64), then three log-scale bisections between the hidden rung and the rung
@@ -163,6 +165,7 @@ pub fn isolate(
     // rounding hid the gap.
     let mut above: Option<f64> = None;
     let mut hidden: Option<(f64, f64)> = None;
+    let mut middle_tried = false;
     for _ in 0..8 {
         match rung(k, mu, assembly, &mut inertia) {
             Rung::Proven { theta, negative } => {
@@ -186,14 +189,27 @@ pub fn isolate(
                 }
                 continue;
             }
-            Rung::Above { many } => {
+            Rung::Above { many, floor } => {
                 if let Some(low) = hidden {
                     // Too many below μ, the gap hidden at the shift below: in between.
                     return bisect(k, low, Some(mu), assembly, &mut inertia);
                 }
                 above = Some(mu);
                 let next = mu / if many { 4096.0 } else { 64.0 };
-                mu = if mu > lowest { next.max(lowest) } else { next };
+                let next = if mu > lowest { next.max(lowest) } else { next };
+                // The error bound barely moves with μ: a rung at most 9/8 of the one just
+                // measured would show θ ≤ 0 whatever its inertia. Once, the log-scale middle
+                // between that bound and μ instead, where there is room: a gap there is proven
+                // one rung sooner (ais2klinik: 4 factorizations to 3); below it (or under the
+                // rounding) the ladder goes on down as before, one rung later, so that a rung
+                // with the gap hidden is still reached for the double-double retry.
+                mu = match floor {
+                    Some(f) if !middle_tried && next <= 1.125 * f && mu > 1.125 * f => {
+                        middle_tried = true;
+                        (f * mu).sqrt()
+                    }
+                    _ => next,
+                };
             }
         }
         if mu < 4.0 * assembly {
@@ -212,8 +228,9 @@ enum Rung {
     Proven { theta: f64, negative: usize },
     /// At most k negative pivots, but θ ≤ 0: the error bound ‖E‖ (`floor`) is at least μ.
     Hidden { floor: f64 },
-    /// More than k negative pivots (`many`: 100 or more), or a zero pivot.
-    Above { many: bool },
+    /// More than k negative pivots (`many`: 100 or more), or a zero pivot; `floor`, the error
+    /// bound ‖E‖ plus `assembly` of the factorization, where one was completed.
+    Above { many: bool, floor: Option<f64> },
     /// The matrix could not be formed.
     Failed,
 }
@@ -238,6 +255,7 @@ fn rung(
         }
         Some(other) => Rung::Above {
             many: matches!(other, Some((negative, _)) if negative >= 100),
+            floor: other.map(|(_, error)| error + assembly),
         },
     }
 }
@@ -388,11 +406,14 @@ mod tests {
         let eig = [0.0, 5e-10, 5e-9, 1.0];
         let (_, shifts) = ladder_above(1e-8, 1e-10, &eig, 1, 2e-10);
         assert_eq!(shifts, vec![1e-8, 4e-10]);
-        // Too many below 4·floor too: down by 64 from there as before (hidden: error 2e-10), then
-        // bisection between.
+        // Too many below 4·floor too: once the middle between the error bound measured there
+        // (2e-10) and 4e-10, then down by 64 from there as before (hidden), then bisection
+        // between, ending hidden (λ₂ lies under the rounding) for the double-double retry.
         let eig = [0.0, 1e-10, 1.0];
-        let (_, shifts) = ladder_above(1e-8, 1e-10, &eig, 1, 2e-10);
-        assert_eq!(&shifts[..3], &[1e-8, 4e-10, 4e-10 / 64.0]);
+        let (l, shifts) = ladder_above(1e-8, 1e-10, &eig, 1, 2e-10);
+        let middle = (2e-10f64 * 4e-10).sqrt();
+        assert_eq!(&shifts[..4], &[1e-8, 4e-10, middle, middle / 64.0]);
+        assert!(matches!(l, Ladder::Hidden { .. }), "{l:?}");
         // The floor: γ_{2k+8}·(row sum) at its largest, here the row with k = 6 (40u against 10u
         // and 36u).
         let floor = ldlt_error_floor(&[1, 6, 2], &[1.0, 2.0, 3.0]);
@@ -465,6 +486,35 @@ mod tests {
         // A negative top (the search range is empty above j = 0): only j = 0 is tried.
         assert_eq!(smallest_doubling(-1, |j| j >= 0), Some(0));
         assert_eq!(smallest_doubling(-1, |j| j >= 1), None);
+    }
+
+    #[test]
+    fn a_rung_between_the_error_bound_just_measured_and_the_last_shift() {
+        // A corridor's spectrum near the rounding (ais2klinik's: a gap of ~1.2e-11 under an
+        // error bound of 1.0e-11, the a-priori floor five times lower). From 1.1e-9 the rung
+        // 64 times lower, 1.7e-11, sees three below; the next step down (to 4 × the a-priori
+        // floor, 8e-12) lies under the error those rungs measured and could only be hidden.
+        // Instead the log-scale middle of (1e-11, 1.7e-11) isolates λ₁ and proves θ ≈ 3e-12.
+        let eig = [0.0, 1.4e-11, 1.5e-11, 3e-10, 1e-3];
+        let (l, shifts) = ladder_above(1.1e-9, 2e-12, &eig, 1, 1e-11);
+        let middle = (1e-11f64 * (1.1e-9 / 64.0)).sqrt();
+        assert_eq!(shifts, vec![1.1e-9, 1.1e-9 / 64.0, middle]);
+        match l {
+            Ladder::Found {
+                theta, negative, ..
+            } => {
+                assert_eq!(negative, 1);
+                assert!((theta - (middle - 1e-11)).abs() < 1e-24, "{theta}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // Where that middle still sees too many, down as before (to 8e-12, hidden) and the
+        // bisection between: one rung more than without the middle, the gap proven all the same.
+        let eig = [0.0, 1.2e-11, 1.5e-11, 3e-10, 1e-3];
+        let (l, shifts) = ladder_above(1.1e-9, 2e-12, &eig, 1, 1e-11);
+        assert_eq!(&shifts[..4], &[1.1e-9, 1.1e-9 / 64.0, middle, 8e-12]);
+        assert_eq!(shifts.len(), 5, "{shifts:?}");
+        assert!(matches!(l, Ladder::Found { negative: 1, .. }), "{l:?}");
     }
 
     #[test]
