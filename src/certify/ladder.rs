@@ -490,8 +490,8 @@ mod tests {
 
     #[test]
     fn a_rung_between_the_error_bound_just_measured_and_the_last_shift() {
-        // A corridor's spectrum near the rounding (ais2klinik's: a gap of ~1.2e-11 under an
-        // error bound of 1.0e-11, the a-priori floor five times lower). From 1.1e-9 the rung
+        // A corridor's spectrum near the rounding (ais2klinik's: a gap of ~1.2e-11 just above
+        // an error bound of 1.0e-11, the a-priori floor five times lower). From 1.1e-9 the rung
         // 64 times lower, 1.7e-11, sees three below; the next step down (to 4 × the a-priori
         // floor, 8e-12) lies under the error those rungs measured and could only be hidden.
         // Instead the log-scale middle of (1e-11, 1.7e-11) isolates λ₁ and proves θ ≈ 3e-12.
