@@ -212,6 +212,11 @@ impl System {
     pub fn values_len(&self) -> usize {
         self.system.values_len()
     }
+
+    /// Whether its factorizations split themselves between the cores.
+    pub fn splits_factorizations(&self) -> bool {
+        self.system.splits_factorizations()
+    }
 }
 
 /// [`pose_basis`] of every pose, the two halves of the poses on two cores where the second is

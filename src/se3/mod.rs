@@ -218,17 +218,29 @@ fn solve_problem(
     // pages of the room for the Newton factor's values ([`Room`]), which the first factorization
     // would otherwise fault in one by one on this thread (torus3D: its first LLᵀ took 43 ms, the
     // second 30 ms); where this thread comes to it first, it maps the chunks left itself.
+    // Then the tasks left for an idle core ([`crate::linalg::parallel::when_idle`]: the output's
+    // edge lines) may start there, unless the Newton factorizations split themselves between the
+    // cores; else once the descent is over, beside the certificate.
     let room = Room::new();
+    let descent_splits = std::sync::atomic::AtomicBool::new(false);
     let ((mut translations, mut first), mut certifier) = crate::linalg::parallel::ahead(
         || {
             let system = System::new(&problem, 3);
             room.prepare(system.values_len());
+            descent_splits.store(
+                system.splits_factorizations(),
+                std::sync::atomic::Ordering::Relaxed,
+            );
             system
         },
         || Translations::new(&problem),
         || {
             room.map();
-            Certifier3::new(&problem)
+            let certifier = Certifier3::new(&problem);
+            if !descent_splits.load(std::sync::atomic::Ordering::Relaxed) {
+                crate::linalg::parallel::let_idle_tasks_start();
+            }
+            certifier
         },
         |system, translations| {
             let descent = descend(
@@ -242,6 +254,7 @@ fn solve_problem(
             descent
         },
     );
+    crate::linalg::parallel::let_idle_tasks_start();
     // The Newton factor's memory, pages mapped, for the certificate's factor.
     certifier.reuse(std::mem::take(&mut first.room));
     let mut iterations = first.iterations;

@@ -35,11 +35,14 @@ pub fn write<W: Write>(graph: &PoseGraph, options: WriteOptions, out: W) -> crat
 }
 
 /// The lines of a written graph that its estimate does not change, its edges' and its landmark
-/// observations', formatted ahead of the write ([`constant_lines`], [`write_path_prepared`]):
+/// observations', formatted ahead of the write ([`constant_lines`], [`write_path_prepared`]; a
+/// 3D graph's edges' with [`constant_lines3`], [`write3_path_prepared`]):
 /// the bytes [`write()`] gives them, each line formatted by itself, so a tool can have them
 /// formatted while it solves.
 pub struct ConstantLines {
     options: WriteOptions,
+    /// A 3D graph's ([`constant_lines3`]).
+    spatial: bool,
     edges: usize,
     observations: usize,
     edge_lines: Vec<u8>,
@@ -51,9 +54,15 @@ impl ConstantLines {
     /// edges and observations, the same format and dialect. (That they are the same graph's and
     /// Vertigo lines' is the caller's part: [`write_path_prepared`].)
     fn fit(&self, graph: &PoseGraph, options: WriteOptions) -> bool {
-        self.options == options
+        !self.spatial
+            && self.options == options
             && self.edges == graph.edges.len()
             && self.observations == graph.landmarks.observations.len()
+    }
+
+    /// [`ConstantLines::fit`] for a 3D graph written in `format`.
+    fn fit3(&self, graph: &Graph3, format: Format) -> bool {
+        self.spatial && self.options.format == format && self.edges == graph.edges.len()
     }
 }
 
@@ -82,11 +91,33 @@ pub fn constant_lines(
     }
     ConstantLines {
         options,
+        spatial: false,
         edges: m,
         observations: marks.observations.len(),
         edge_lines,
         observation_lines,
     }
+}
+
+/// The edges' lines of a 3D graph as [`write3`] writes them in `format`; `None` where `format`
+/// is not the graph's form (which [`write3`] refuses).
+pub fn constant_lines3(graph: &Graph3, format: Format) -> Option<ConstantLines> {
+    let (_, edge_tag) = tags3(graph, format).ok()?;
+    let mut edge_lines = Vec::with_capacity(graph.edges.len() * 400);
+    for e in &graph.edges {
+        edge_line3(graph, edge_tag, e, &mut edge_lines);
+    }
+    Some(ConstantLines {
+        options: WriteOptions {
+            format,
+            dialect: format.default_dialect(),
+        },
+        spatial: true,
+        edges: graph.edges.len(),
+        observations: 0,
+        edge_lines,
+        observation_lines: Vec::new(),
+    })
 }
 
 /// The edge tag of a format.
@@ -477,7 +508,20 @@ pub fn write_path_prepared(
 /// [`write_path`] for a 3D graph: the same temporary file and rename, the lines of
 /// [`write3`].
 pub fn write3_path(graph: &Graph3, format: Format, path: &str) -> crate::Result<()> {
-    write_atomic(path, |out, name| write3_named(graph, format, out, name))
+    write3_path_prepared(graph, format, path, None)
+}
+
+/// [`write3_path`] with the edges' lines formatted ahead ([`constant_lines3`]) where `lines`
+/// holds them for this graph and format: the same bytes.
+pub fn write3_path_prepared(
+    graph: &Graph3,
+    format: Format,
+    path: &str,
+    lines: Option<&ConstantLines>,
+) -> crate::Result<()> {
+    write_atomic(path, |out, name| {
+        write3_named(graph, format, lines, out, name)
+    })
 }
 
 /// Writes a file the way [`write_path`] does, whatever it holds: `write(out, name)` writes to
@@ -529,16 +573,12 @@ pub fn write_atomic(
 /// information values in the file's order, FIX ids on one line at the end, every number in
 /// shortest round-trip form, so the file read back gives every value bit for bit.
 pub fn write3<W: Write>(graph: &Graph3, format: Format, mut out: W) -> crate::Result<()> {
-    write3_named(graph, format, &mut out, "<stdout>")
+    write3_named(graph, format, None, &mut out, "<stdout>")
 }
 
-fn write3_named(
-    graph: &Graph3,
-    format: Format,
-    out: &mut dyn Write,
-    name: &str,
-) -> crate::Result<()> {
-    let (vertex_tag, edge_tag) = match (format, graph.form) {
+/// The vertex and edge tags of `graph` written in `format`, which must be its form.
+fn tags3(graph: &Graph3, format: Format) -> crate::Result<(&'static str, &'static str)> {
+    Ok(match (format, graph.form) {
         (Format::G2o, Form3::G2o) => (reader3::G2O_VERTEX, reader3::G2O_EDGE),
         (Format::Toro, Form3::Toro) => (reader3::TORO_VERTEX, reader3::TORO_EDGE),
         (Format::Toro, Form3::G2o) => {
@@ -551,8 +591,26 @@ fn write3_named(
                 "a 3D TORO graph (Euler angles) cannot be written as g2o (VERTEX_SE3:QUAT/EDGE_SE3:QUAT, quaternions) without loss: the quaternions would be computed, not copied, and the information matrices are over other rotation coordinates (roll pitch yaw against qx qy qz); write it as TORO".into(),
             ));
         }
-    };
+    })
+}
+
+/// Appends the line of 3D edge `e`.
+fn edge_line3(graph: &Graph3, edge_tag: &str, e: &crate::graph3::Edge3, buf: &mut Vec<u8>) {
+    buf.extend_from_slice(edge_tag.as_bytes());
+    let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
+    end_line(e.measurement.values().chain(e.information.0), buf);
+}
+
+fn write3_named(
+    graph: &Graph3,
+    format: Format,
+    lines: Option<&ConstantLines>,
+    out: &mut dyn Write,
+    name: &str,
+) -> crate::Result<()> {
+    let (vertex_tag, edge_tag) = tags3(graph, format)?;
     check_finite3(graph)?;
+    let lines = lines.filter(|l| l.fit3(graph, format));
     let io = |e| Error::io(name, e);
     let mut buf: Vec<u8> = Vec::with_capacity(1 << 16);
     let mut put = |buf: &mut Vec<u8>, last: bool| -> crate::Result<()> {
@@ -562,15 +620,17 @@ fn write3_named(
         }
         Ok(())
     };
-    let edge_line = |e: &crate::graph3::Edge3, buf: &mut Vec<u8>| {
-        buf.extend_from_slice(edge_tag.as_bytes());
-        let _ = write!(buf, " {} {}", graph.ids[e.i], graph.ids[e.j]);
-        end_line(e.measurement.values().chain(e.information.0), buf);
-    };
+    let edge_line =
+        |e: &crate::graph3::Edge3, buf: &mut Vec<u8>| edge_line3(graph, edge_tag, e, buf);
     // As in 2D ([`write_named`]): with a second core, the last edges' lines are formatted there
     // into a buffer of their own while this thread formats the vertices and the first edges
     // (each line alone, so the bytes are the same). A vertex line has 7 numbers, an edge's 28.
-    let m = graph.edges.len();
+    // Formatted ahead, the edges' lines are written as they are.
+    let m = if lines.is_some() {
+        0
+    } else {
+        graph.edges.len()
+    };
     let split =
         m >= PARALLEL_EDGES_3D && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
     let mid = if split {
@@ -605,6 +665,10 @@ fn write3_named(
         }
         Ok(())
     })?;
+    if let Some(lines) = lines {
+        put(&mut buf, true)?;
+        out.write_all(&lines.edge_lines).map_err(io)?;
+    }
     if !graph.fixed.is_empty() {
         buf.extend_from_slice(g2o::FIX.as_bytes());
         for &k in &graph.fixed {
@@ -612,7 +676,7 @@ fn write3_named(
         }
         buf.push(b'\n');
     }
-    put(&mut buf, true)?;
+    out.write_all(&buf).map_err(io)?;
     out.flush().map_err(io)
 }
 
@@ -776,6 +840,70 @@ mod tests {
                 }
                 // TORO has a form for the plain pose graph only.
                 assert_eq!(plain.is_ok(), format == Format::G2o || k == 3);
+            }
+        }
+    }
+
+    /// The same for 3D graphs ([`constant_lines3`], [`write3_path_prepared`]): a g2o graph
+    /// (quaternions, with a FIX and a repeated edge) and a TORO one (Euler angles) give the file
+    /// [`write3_path`] writes, byte for byte; lines made for a graph with an edge less, or a
+    /// planar graph's lines, are not used, and the format that is not the graph's form has no
+    /// lines (and the write is refused as before).
+    #[test]
+    fn lines_formatted_ahead_write_the_same_3d_file() {
+        let info = "1 0 0 0 0 0 2 0 0 0 0 3 0 0 0 4 0 0 5 0 6.5";
+        let g2o = format!(
+            "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 2 1 0.5 0.25 0.1 0.2 0.3 0.927\n\
+             VERTEX_SE3:QUAT 5 2 1 -3 0 0 0.6 0.8\n\
+             EDGE_SE3:QUAT 0 2 1 0.5 0.25 0.1 0.2 0.3 0.927 {info}\n\
+             EDGE_SE3:QUAT 2 5 1 0.5 -3.25 0 0 0.6 0.8 {info}\n\
+             EDGE_SE3:QUAT 2 5 1.125 0.5 -3 0 0 0.6 0.8 {info}\nFIX 0\n"
+        );
+        let toro = format!(
+            "VERTEX3 1 0 0 0 0 0 0\nVERTEX3 4 1 0.5 0.25 0.1 -0.2 0.3\n\
+             EDGE3 1 4 1 0.5 0.25 0.1 -0.2 0.3 {info}\nEDGE3 4 1 -1 0.5 0.25 0 0 3 {info}\n"
+        );
+        let planar = "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2 1 2 1 0 0 1 0 0 1 0 1\n\
+            EDGE_SE2 2 0 1 0 0 1 0 0 1 0 1\n";
+        let (planar, _) =
+            super::super::read(planar.as_bytes(), "in.g2o", &Default::default()).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        for (text, form) in [(g2o, Format::G2o), (toro, Format::Toro)] {
+            let (graph, _) =
+                super::super::read3(text.as_bytes(), "in", &Default::default()).unwrap();
+            assert_eq!(graph.edges.len(), if form == Format::G2o { 3 } else { 2 });
+            let mut fewer = graph.clone();
+            fewer.edges.pop();
+            for format in [Format::G2o, Format::Toro] {
+                let plain = write3_path(&graph, format, &path("plain"))
+                    .map(|()| std::fs::read(path("plain")).unwrap());
+                assert_eq!(plain.is_ok(), format == form);
+                assert_eq!(constant_lines3(&graph, format).is_some(), format == form);
+                let planar_lines = constant_lines(
+                    &planar,
+                    None,
+                    WriteOptions {
+                        format,
+                        dialect: format.default_dialect(),
+                    },
+                );
+                // As many edges as the g2o graph: only their kind tells them apart.
+                assert_eq!(planar_lines.edges, 3);
+                let candidates = [
+                    constant_lines3(&graph, format),
+                    constant_lines3(&fewer, format),
+                    Some(planar_lines),
+                ];
+                for lines in candidates.iter().flatten() {
+                    let ahead = write3_path_prepared(&graph, format, &path("ahead"), Some(lines))
+                        .map(|()| std::fs::read(path("ahead")).unwrap());
+                    match (&plain, &ahead) {
+                        (Ok(a), Ok(b)) => assert!(a == b, "{form:?} as {format:?}"),
+                        (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                        _ => panic!("{form:?} as {format:?}: {plain:?} against {ahead:?}"),
+                    }
+                }
             }
         }
     }
