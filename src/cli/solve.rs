@@ -444,11 +444,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         ..Default::default()
     };
     let t1 = Instant::now();
-    let out_format = output.map(|path| {
-        args.to
-            .or_else(|| Format::from_extension(path))
-            .unwrap_or(read_report.format)
-    });
+    let out_format = output_format(args, output, read_report.format);
     // The output's edge and observation lines do not depend on the estimate: in a plain solve
     // the second core formats them once the solver lets it (its share of the work built ahead
     // done, and the descent too where the Newton factorizations take both cores), while this
@@ -686,11 +682,7 @@ fn run3(
         ..Default::default()
     };
     let t1 = Instant::now();
-    let out_format = output.map(|path| {
-        args.to
-            .or_else(|| Format::from_extension(path))
-            .unwrap_or(read_report.format)
-    });
+    let out_format = output_format(args, output, read_report.format);
     // The edges' lines of the output, formatted on the second core while it idles, as in 2D
     // ([`run`]); a 3D edge's line is three times a planar one's. Whole process against writing
     // them all at the end (15-41 interleaved pairs, the same bytes): sphere2500 0.965-0.971,
@@ -975,6 +967,15 @@ fn write_marginals(graph: &crate::graph::PoseGraph, path: &str) -> crate::Result
     }
     io::write_bytes_path(&text, path)?;
     Ok(())
+}
+
+/// The format of the output `output`, if any: `--to`, else its extension's, else the input's.
+fn output_format(args: &Args, output: Option<&str>, input: Format) -> Option<Format> {
+    output.map(|path| {
+        args.to
+            .or_else(|| Format::from_extension(path))
+            .unwrap_or(input)
+    })
 }
 
 /// The most edge and observation lines formatted ahead of the write ([`run`]), about 10 MB,
