@@ -36,10 +36,14 @@ impl ProgressArgs {
 /// Whether a terminal line of progress is drawn now (cleared by [`clear_after_interrupt`]).
 static DRAWN: AtomicBool = AtomicBool::new(false);
 
-/// Erases the progress line of a terminal, for the interrupt handler (the process ends next).
+/// Erases the progress line of a terminal, for the interrupt handler (the process ends next):
+/// one write(2), async-signal-safe, past stderr's lock (which the interrupted code may hold).
 pub fn clear_after_interrupt() {
+    #[cfg(unix)]
     if DRAWN.load(Ordering::Relaxed) {
-        let _ = std::io::stderr().write_all(b"\r\x1b[2K");
+        const CLEAR: &[u8] = b"\r\x1b[2K";
+        // SAFETY: write(2) reads CLEAR's bytes only.
+        let _ = unsafe { libc::write(libc::STDERR_FILENO, CLEAR.as_ptr().cast(), CLEAR.len()) };
     }
 }
 

@@ -8,7 +8,7 @@ use crate::graph::{LandmarkForm, PoseGraph};
 use crate::graph3::{Form3, Graph3};
 use crate::vertigo::{self, EdgeKind, Vertigo};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// How to write a graph.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -716,45 +716,113 @@ pub fn write_bytes_path(bytes: &[u8], path: &str) -> crate::Result<()> {
     Ok(())
 }
 
-/// The temporary files being written now, for [`remove_temporary_files`].
-static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+/// The temporary files being written now, for [`remove_temporary_files`]: NUL-terminated, so
+/// that a signal handler removes them with unlink(2), which allocates nothing.
+static PENDING: std::sync::Mutex<Vec<std::ffi::CString>> = std::sync::Mutex::new(Vec::new());
 
-fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
-    PENDING
+/// [`PENDING`], locked with the interrupt signals blocked on this thread ([`Pending`]'s changes):
+/// a handler on this thread never finds the list locked by the code it interrupted, and one on
+/// another thread waits a few instructions at most ([`remove_temporary_files`]).
+fn with_pending<R>(change: impl FnOnce(&mut Vec<std::ffi::CString>) -> R) -> R {
+    let _blocked = interrupts::Blocked::new();
+    let mut list = PENDING
         .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    change(&mut list)
 }
 
 /// A temporary file listed in [`PENDING`] while this lives.
-pub struct Pending(PathBuf);
+pub struct Pending(std::ffi::CString);
 
 impl Pending {
     /// Lists `path` (an absolute path, so that it stays right whatever the working directory)
     /// until the returned value is dropped.
     pub fn list(path: &Path) -> Self {
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-        pending().push(path.clone());
+        // A path with a NUL byte cannot name a file, nor be created: nothing to remove then.
+        let path =
+            std::ffi::CString::new(path.into_os_string().into_encoded_bytes()).unwrap_or_default();
+        with_pending(|list| list.push(path.clone()));
         Pending(path)
     }
 }
 
 impl Drop for Pending {
     fn drop(&mut self) {
-        let mut list = pending();
-        if let Some(k) = list.iter().rposition(|p| *p == self.0) {
-            list.swap_remove(k);
-        }
+        with_pending(|list| {
+            if let Some(k) = list.iter().rposition(|p| *p == self.0) {
+                list.swap_remove(k);
+            }
+        });
     }
 }
 
 /// Removes the temporary files being written now (by [`write_path`], or listed with
 /// [`Pending::list`]): what an interrupted tool calls before it ends, so that no hidden
-/// `.pgo-*.tmp` file is left behind. Returns how many were removed.
+/// `.pgo-*.tmp` file is left behind. Returns how many were removed. Async-signal-safe (a tool
+/// calls it from its signal handler): it allocates nothing, and waits for the list only while
+/// another thread changes it, with the interrupts blocked there.
 pub fn remove_temporary_files() -> usize {
-    let list = pending();
-    list.iter()
-        .filter(|p| std::fs::remove_file(p).is_ok())
-        .count()
+    let list = loop {
+        match PENDING.try_lock() {
+            Ok(list) => break list,
+            Err(std::sync::TryLockError::Poisoned(poisoned)) => break poisoned.into_inner(),
+            Err(std::sync::TryLockError::WouldBlock) => std::hint::spin_loop(),
+        }
+    };
+    list.iter().filter(|p| interrupts::unlink(p)).count()
+}
+
+/// The system calls behind [`PENDING`]'s use in a signal handler.
+mod interrupts {
+    /// The signals whose handler removes the temporary files (a tool's SIGINT, SIGTERM and
+    /// SIGHUP), blocked on this thread while this lives.
+    pub struct Blocked {
+        #[cfg(unix)]
+        before: libc::sigset_t,
+    }
+
+    impl Blocked {
+        pub fn new() -> Self {
+            #[cfg(unix)]
+            // SAFETY: sigset_t is a plain C struct, initialized by sigemptyset before use;
+            // pthread_sigmask changes this thread's mask only and writes the old one to
+            // `before`.
+            unsafe {
+                let mut set = std::mem::zeroed::<libc::sigset_t>();
+                let mut before = std::mem::zeroed::<libc::sigset_t>();
+                libc::sigemptyset(&mut set);
+                for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+                    libc::sigaddset(&mut set, signal);
+                }
+                libc::pthread_sigmask(libc::SIG_BLOCK, &set, &mut before);
+                Blocked { before }
+            }
+            #[cfg(not(unix))]
+            Blocked {}
+        }
+    }
+
+    impl Drop for Blocked {
+        fn drop(&mut self) {
+            #[cfg(unix)]
+            // SAFETY: restores the mask that `new` read.
+            unsafe {
+                libc::pthread_sigmask(libc::SIG_SETMASK, &self.before, std::ptr::null_mut());
+            }
+        }
+    }
+
+    /// Removes the file at `path`; whether it was removed.
+    pub fn unlink(path: &std::ffi::CStr) -> bool {
+        #[cfg(unix)]
+        // SAFETY: unlink(2) reads the NUL-terminated path only.
+        unsafe {
+            libc::unlink(path.as_ptr()) == 0
+        }
+        #[cfg(not(unix))]
+        std::str::from_utf8(path.to_bytes()).is_ok_and(|path| std::fs::remove_file(path).is_ok())
+    }
 }
 
 /// Temporary files are created private (0600); a written graph gets the usual 0644.
@@ -955,7 +1023,38 @@ mod tests {
         assert!(remove_temporary_files() >= 1);
         assert!(!a.exists() && b.exists());
         drop(listed_a);
-        assert!(!pending().iter().any(|p| p.starts_with(dir.path())));
+        let dir = dir.path().as_os_str().as_encoded_bytes();
+        assert!(!with_pending(|list| list
+            .iter()
+            .any(|p| p.to_bytes().starts_with(dir))));
+    }
+
+    /// The interrupt signals are blocked only while the list changes: the thread's mask after
+    /// listing and unlisting is the one before (else a tool would ignore Ctrl-C from its first
+    /// output on).
+    #[cfg(unix)]
+    #[test]
+    fn listing_a_temporary_file_leaves_the_signal_mask_as_it_was() {
+        fn mask() -> libc::sigset_t {
+            // SAFETY: a null new mask only reads this thread's mask into the zeroed set.
+            unsafe {
+                let mut set = std::mem::zeroed::<libc::sigset_t>();
+                libc::pthread_sigmask(libc::SIG_BLOCK, std::ptr::null(), &mut set);
+                set
+            }
+        }
+        let blocked = |set: &libc::sigset_t| {
+            [libc::SIGINT, libc::SIGTERM, libc::SIGHUP]
+                // SAFETY: sigismember reads the set only.
+                .map(|s| unsafe { libc::sigismember(set, s) })
+        };
+        let before = mask();
+        let listed = Pending::list(Path::new("/nonexistent/.pgo-x.tmp"));
+        assert_eq!(blocked(&mask()), blocked(&before));
+        drop(listed);
+        assert_eq!(blocked(&mask()), blocked(&before));
+        // Inside a change they are blocked.
+        assert_eq!(with_pending(|_| blocked(&mask())), [1, 1, 1]);
     }
 
     fn fmt(v: f64) -> String {
