@@ -239,7 +239,7 @@ fn a_closed_pipe_ends_the_tool_with_status_141_silently() {
 
 #[test]
 fn forced_progress_shows_the_phases_on_stderr_and_changes_no_output() {
-    let mit = common::datasets_dir().join("MIT.g2o");
+    let mit = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("datasets/MIT.g2o");
     let toy = concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/paper_toy.g2o");
     let run = |args: &[&str]| {
         Command::new(bin("pgo-solve"))
@@ -311,5 +311,67 @@ fn forced_progress_shows_the_phases_on_stderr_and_changes_no_output() {
             err.starts_with(&format!("{tool}: reading {toy}\n")),
             "{err}"
         );
+    }
+}
+
+/// pgo-solve writes its output file on the second core while the certificate is computed, from
+/// the estimate it is about to certify, and puts it in place only where the solve ends there:
+/// the file is the one written to stdout (never written ahead) byte for byte, and no temporary
+/// file is left, where the estimate is kept (MIT, with and without a FIX pose) and where the
+/// staircase moves it after (a generated graph whose relaxation is not exact at rank 1).
+#[test]
+fn the_output_written_ahead_of_the_certificate_is_the_one_written_after_it() {
+    let dir = Dir::new();
+    let mit = common::datasets_dir().join("MIT.g2o");
+    let mut fixed = std::fs::read(&mit).unwrap();
+    fixed.extend_from_slice(b"FIX 3\n");
+    let fixed = dir.file("mit-fix.g2o", &fixed);
+    let noisy = dir.path("noisy.g2o");
+    let simulate = Command::new(bin("pgo-simulate"))
+        .args([
+            "-n",
+            "150",
+            "--loop-model",
+            "per-pose",
+            "--loop-probability",
+            "0.3",
+        ])
+        .args([
+            "--rotation-noise",
+            "gaussian:0.6",
+            "--translation-noise",
+            "gaussian:0.5",
+        ])
+        .args(["--seed", "1", "-q", "-o", s(&noisy)])
+        .status()
+        .unwrap();
+    assert!(simulate.success());
+    for (graph, climbs) in [(&mit, false), (&fixed, false), (&noisy, true)] {
+        let file = dir.path("out.g2o");
+        // Twice: the second rename replaces the first file.
+        for _ in 0..2 {
+            let run = Command::new(bin("pgo-solve"))
+                .args([s(graph), "--json", "-q", "-o", s(&file)])
+                .output()
+                .unwrap();
+            assert!(run.status.success(), "{}", text(&run.stderr));
+            let rank = text(&run.stdout)
+                .split("\"rank\":")
+                .nth(1)
+                .and_then(|r| r.split([',', '}']).next()?.parse::<usize>().ok())
+                .unwrap();
+            assert_eq!(rank > 1, climbs, "{}: rank {rank}", graph.display());
+        }
+        let stdout = Command::new(bin("pgo-solve"))
+            .args([s(graph), "-q", "-o", "-"])
+            .output()
+            .unwrap();
+        assert!(stdout.status.success());
+        assert!(
+            std::fs::read(&file).unwrap() == stdout.stdout,
+            "{}",
+            graph.display()
+        );
+        assert!(temporaries(dir.0.path()).is_empty(), "{:?}", dir.entries());
     }
 }

@@ -11,7 +11,7 @@ use crate::graph::NoiseKind;
 use crate::io::{self, Format, WriteOptions};
 use crate::robust::gnc::{DEFAULT_INLIER_THRESHOLD, GncIteration};
 use crate::robust::{Loss, RobustOptions, RobustSolution, StopReason, robust_solve};
-use crate::solve::{Method, Solution, SolveOptions, solve};
+use crate::solve::{Method, Solution, SolveOptions, solve, solve_offering};
 use clap::Parser;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -451,6 +451,8 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     // thread descends or certifies ([`crate::linalg::parallel::when_idle`]; kitti_00 spent 14%
     // of its time writing).
     let shared = std::sync::Arc::new(graph);
+    // Also handed to the output written ahead, below.
+    let lines_ahead = std::sync::Arc::new(std::sync::OnceLock::new());
     let lines = match (out_format, args.robust) {
         (Some(format), None)
             if shared.noise == NoiseKind::Information
@@ -463,9 +465,52 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 format,
                 dialect: format.default_dialect(),
             };
+            let slot = std::sync::Arc::clone(&lines_ahead);
             Some(crate::linalg::parallel::when_idle(move || {
-                io::constant_lines(&graph, None, options)
+                let lines = std::sync::Arc::new(io::constant_lines(&graph, None, options));
+                let _ = slot.set(std::sync::Arc::clone(&lines));
+                lines
             }))
+        }
+        _ => None,
+    };
+    // The output file written ahead: where the lines are formatted ahead and the output is a
+    // regular file, the staircase's estimate is written to its temporary file on the second
+    // core while the certificate is computed ([`Ahead`]); put in place at the end where the
+    // solution's estimate is that one, bit for bit.
+    let ahead = std::rc::Rc::new(std::cell::RefCell::new(None::<Ahead>));
+    let taker = match (output, out_format) {
+        (Some(path), Some(format)) if lines.is_some() && !args.refine && io::stages(path) => {
+            let (graph, slot, path) = (
+                std::sync::Arc::clone(&shared),
+                std::sync::Arc::clone(&lines_ahead),
+                path.to_string(),
+            );
+            let ahead = std::rc::Rc::clone(&ahead);
+            let taker: crate::solve::CandidateTaker = Box::new(move |poses, landmarks| {
+                let mut ahead = ahead.borrow_mut();
+                if ahead.is_some() {
+                    return;
+                }
+                let (graph, slot, path) = (graph.clone(), slot.clone(), path.clone());
+                let (p, l) = (poses.to_vec(), landmarks.to_vec());
+                let file = crate::linalg::parallel::when_idle(move || {
+                    let mut graph = (*graph).clone();
+                    with_estimate(&mut graph, &p, &l);
+                    let options = WriteOptions {
+                        format,
+                        dialect: format.default_dialect(),
+                    };
+                    let lines = slot.get().cloned();
+                    io::stage_graph(&graph, None, options, &path, lines.as_deref())
+                });
+                *ahead = Some(Ahead {
+                    estimate: poses.to_vec(),
+                    landmarks: landmarks.to_vec(),
+                    file: Some(file),
+                });
+            });
+            Some(taker)
         }
         _ => None,
     };
@@ -475,7 +520,12 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut dropped = None;
     let (solution, robust) = match args.robust {
         None => (
-            progress.watch(|| rec.observe(|| solve(&shared, &options)))?,
+            progress.watch(|| {
+                rec.observe(|| match taker {
+                    Some(taker) => solve_offering(&shared, &options, taker),
+                    None => solve(&shared, &options),
+                })
+            })?,
             None,
         ),
         Some(loss) => {
@@ -509,18 +559,28 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         }
     };
     let solve_s = t1.elapsed().as_secs_f64();
-    // Taken (or waited for) before the graph is: the task holds it.
+    // Taken (or waited for) before the graph is: the tasks hold it.
     let lines = lines.and_then(|l| l.take());
+    // The output written ahead, if it holds this estimate (else removed here).
+    let staged = ahead.borrow_mut().take().and_then(|mut a| {
+        let file = a.file.take()?.take();
+        let same = same_bits(&a.estimate, &solution.estimate)
+            && a.landmarks
+                .iter()
+                .flatten()
+                .map(|v| v.to_bits())
+                .eq(solution
+                    .landmark_estimate
+                    .iter()
+                    .flatten()
+                    .map(|v| v.to_bits()));
+        // A write that failed is done again below, where its error is reported.
+        same.then_some(file?.ok()?).flatten()
+    });
     let mut graph = dropped.unwrap_or_else(|| {
         std::sync::Arc::try_unwrap(shared).unwrap_or_else(|graph| (*graph).clone())
     });
-    graph.poses.clone_from(&solution.estimate);
-    graph.vertices_declared = true;
-    graph
-        .landmarks
-        .positions
-        .clone_from(&solution.landmark_estimate);
-    graph.landmarks.declared = true;
+    with_estimate(&mut graph, &solution.estimate, &solution.landmark_estimate);
     rec.optimized(&graph, options.weights);
     if let Some((mut all_edges, rejected, residuals, iterations)) = gnc_view {
         // Every edge as read (also under --drop-outliers), at the estimate.
@@ -537,14 +597,15 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 "writing {}",
                 if path == "-" { "<stdout>" } else { path }
             ));
-            super::memory::release_beside(|| {
-                write_graph(
+            super::memory::release_beside(|| match staged {
+                Some(staged) => staged.persist().map_err(Error::from),
+                None => write_graph(
                     &mut graph,
                     read_report.vertigo.as_ref(),
                     path,
                     format,
-                    lines.as_ref(),
-                )
+                    lines.as_deref(),
+                ),
             })
         }
         _ => Ok(()),
@@ -983,6 +1044,43 @@ fn output_format(args: &Args, output: Option<&str>, input: Format) -> Option<For
 /// 25 000; the generated 10⁵-pose world (115 000 edges) gained nothing from it and peaked 19 MiB
 /// higher, and at 10⁶ poses the lines would be some 190 MB.
 const LINES_AHEAD_MAX: usize = 1 << 16;
+
+/// The output file written ahead of the certificate ([`run`]): the estimate it holds and the
+/// second core's task writing it to a temporary file. Dropped unused, it waits for a task
+/// running and removes its file: none is left behind when the solve ends elsewhere.
+struct Ahead {
+    estimate: Vec<crate::graph::Pose2>,
+    landmarks: Vec<[f64; 2]>,
+    file: Option<crate::linalg::parallel::Idle<pgo_io::Result<Option<io::Staged>>>>,
+}
+
+impl Drop for Ahead {
+    fn drop(&mut self) {
+        if let Some(file) = self.file.take() {
+            drop(file.take());
+        }
+    }
+}
+
+/// Whether two estimates are the same bits.
+fn same_bits(a: &[crate::graph::Pose2], b: &[crate::graph::Pose2]) -> bool {
+    let bits = |p: &crate::graph::Pose2| [p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()];
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+}
+
+/// `graph` holding the solved `poses` and `landmarks` as the output declares them.
+fn with_estimate(
+    graph: &mut crate::graph::PoseGraph,
+    poses: &[crate::graph::Pose2],
+    landmarks: &[[f64; 2]],
+) {
+    graph.poses.clear();
+    graph.poses.extend_from_slice(poses);
+    graph.vertices_declared = true;
+    graph.landmarks.positions.clear();
+    graph.landmarks.positions.extend_from_slice(landmarks);
+    graph.landmarks.declared = true;
+}
 
 /// Writes the solved graph to `path` in `format`, its edge and observation lines from `lines`
 /// where they were formatted ahead.

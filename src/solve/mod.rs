@@ -221,7 +221,27 @@ pub struct Solution {
 /// Besides the solvers' own: two or more fixed poses (`FIX`) in one connected component, which
 /// make a problem with known poses that this does not solve.
 pub fn solve(graph: &PoseGraph, options: &SolveOptions) -> crate::Result<Solution> {
-    solve_with(graph, None, options)
+    solve_with(graph, None, options, None)
+}
+
+/// A taker of a solve's estimate before its certificate ([`solve_offering`]): the poses and
+/// landmark positions in the graph's order, as [`Solution::estimate`] and
+/// [`Solution::landmark_estimate`] would hold them.
+pub type CandidateTaker = Box<dyn FnMut(&[Pose2], &[[f64; 2]])>;
+
+/// As [`solve`], with `candidate` given the estimate that the scalable solver is about to
+/// certify, in the form the solution would hold it (the FIX pose where the input has it, headings
+/// wrapped), before the certificate is computed: for work that depends only on the estimate
+/// (pgo-solve writes its output file on the second core meanwhile). A candidate, not the answer:
+/// a polish or the staircase may move the estimate after, so whoever uses it compares it with the
+/// solution's, bit for bit. Offered for a graph of one connected component solved by the
+/// staircase without `refine`; never otherwise. The solution is the same with or without it.
+pub fn solve_offering(
+    graph: &PoseGraph,
+    options: &SolveOptions,
+    candidate: CandidateTaker,
+) -> crate::Result<Solution> {
+    solve_with(graph, None, options, Some(candidate))
 }
 
 /// As [`solve`], warm started from `initial`, an estimate of the graph's poses (one per pose, in
@@ -247,7 +267,7 @@ pub fn solve_from(
     options: &SolveOptions,
 ) -> crate::Result<Solution> {
     check_initial(graph, initial)?;
-    solve_with(graph, Some(initial), options)
+    solve_with(graph, Some(initial), options, None)
 }
 
 /// Refuses an initial estimate that is not one finite pose per pose of `graph`.
@@ -276,6 +296,7 @@ fn solve_with(
     graph: &PoseGraph,
     initial: Option<&[Pose2]>,
     options: &SolveOptions,
+    mut candidate: Option<CandidateTaker>,
 ) -> crate::Result<Solution> {
     check_not_empty(graph)?;
     if options.method == Method::Sdp {
@@ -293,8 +314,26 @@ fn solve_with(
         certify: options.certify,
         ..Default::default()
     };
-    for (part, members, _) in graph.components() {
+    let components_of = graph.components();
+    // A candidate only where one staircase solves the whole graph as it is returned.
+    if components_of.len() != 1 || options.refine {
+        candidate = None;
+    }
+    for (part, members, _) in components_of {
         let weights = edge_weights(&part, options.weights)?;
+        // Where the part's landmarks are in the graph's.
+        let landmark_index: Vec<usize> = part
+            .landmarks
+            .ids
+            .iter()
+            .map(|id| {
+                graph
+                    .landmarks
+                    .index_of(*id)
+                    .expect("a component's landmarks are the graph's")
+            })
+            .collect();
+        let fixed = part.fixed.first().copied();
         let n = part.num_poses();
         let sdp = match options.method {
             Method::Sdp => true,
@@ -304,16 +343,39 @@ fn solve_with(
         let run_sdp = || algorithm1::solve_connected(&part, &weights, options.solver);
         // The warm start's poses of this component, in its order.
         let start: Option<Vec<Pose2>> = initial.map(|p| members.iter().map(|&k| p[k]).collect());
-        let run_staircase = || -> crate::Result<(StaircaseSolution, Vec<Pose2>)> {
+        let mut run_staircase = || -> crate::Result<(StaircaseSolution, Vec<Pose2>)> {
             check_edge_terms(&part, &weights, &weights)?;
-            solve_graph_from_estimate(
-                &part,
-                &weights,
-                &staircase,
-                start.as_deref(),
-                &mut report_step(),
-            )
-            .ok_or_else(|| Error::Invalid("the graph is not connected".into()))
+            let run = || {
+                solve_graph_from_estimate(
+                    &part,
+                    &weights,
+                    &staircase,
+                    start.as_deref(),
+                    &mut report_step(),
+                )
+            };
+            let solved = match candidate.take() {
+                None => run(),
+                Some(mut taker) => {
+                    // The staircase's poses as this function places them below.
+                    let (np, members, landmark_index) =
+                        (part.num_poses(), members.clone(), landmark_index.clone());
+                    let fixed_at = fixed.map(|k| (k, part.poses[k]));
+                    let (mut estimate, mut landmarks) =
+                        (estimate.clone(), landmark_estimate.clone());
+                    let placing = Box::new(move |poses: &[Pose2]| {
+                        let poses = match fixed_at {
+                            Some((k, at)) => move_pose_to(poses, k, at),
+                            None => poses.to_vec(),
+                        };
+                        let at = (np, &members[..], &landmark_index[..]);
+                        place(poses, fixed, at, &mut estimate, &mut landmarks);
+                        taker(&estimate, &landmarks);
+                    });
+                    crate::staircase::candidate::offering(placing, run)
+                }
+            };
+            solved.ok_or_else(|| Error::Invalid("the graph is not connected".into()))
         };
         // The first method as chosen; where it certifies, its result as it is.
         let mut algorithm1 = None;
@@ -362,7 +424,6 @@ fn solve_with(
             )
         };
         // The gauge: a FIX pose stays where the input has it (the solvers place pose 0 there).
-        let fixed = part.fixed.first().copied();
         if let Some(k) = fixed {
             poses = move_pose_to(&poses, k, part.poses[k]);
         }
@@ -375,24 +436,8 @@ fn solve_with(
             report.refine_iterations = Some(refined.iterations);
             poses = refined.poses;
         }
-        // Headings in (-π, π] (the same rotations: f and chi2 see only e^{iθ} and wrapped
-        // differences), but the fixed pose exactly as read.
-        for (k, pose) in poses.iter_mut().enumerate() {
-            if Some(k) != fixed {
-                pose.theta = wrap_angle(pose.theta);
-            }
-        }
-        let np = part.num_poses();
-        for (pose, &k) in poses[..np].iter().zip(&members) {
-            estimate[k] = *pose;
-        }
-        for (p, id) in poses[np..].iter().zip(&part.landmarks.ids) {
-            let k = graph
-                .landmarks
-                .index_of(*id)
-                .expect("a component's landmarks are the graph's");
-            landmark_estimate[k] = [p.x, p.y];
-        }
+        let at = (part.num_poses(), &members[..], &landmark_index[..]);
+        place(poses, fixed, at, &mut estimate, &mut landmark_estimate);
         report.landmarks = part.landmarks.len();
         report.observations = part.landmarks.observations.len();
         components.push(report);
@@ -456,6 +501,31 @@ fn check_fixed(graph: &PoseGraph) -> crate::Result<()> {
                 list.join(", ")
             )))
         }
+    }
+}
+
+/// Places a component's solved `poses` (its poses, then its landmarks as poses) in the graph's
+/// `estimate` and `landmarks`, `at` = (the component's pose count, the graph index of each of its
+/// poses, of each of its landmarks): headings in (-π, π] (the same rotations: f and chi2 see only
+/// e^{iθ} and wrapped differences), but the `fixed` pose exactly as read.
+fn place(
+    mut poses: Vec<Pose2>,
+    fixed: Option<usize>,
+    at: (usize, &[usize], &[usize]),
+    estimate: &mut [Pose2],
+    landmarks: &mut [[f64; 2]],
+) {
+    let (np, members, landmark_index) = at;
+    for (k, pose) in poses.iter_mut().enumerate() {
+        if Some(k) != fixed {
+            pose.theta = wrap_angle(pose.theta);
+        }
+    }
+    for (pose, &k) in poses[..np].iter().zip(members) {
+        estimate[k] = *pose;
+    }
+    for (p, &k) in poses[np..].iter().zip(landmark_index) {
+        landmarks[k] = [p.x, p.y];
     }
 }
 

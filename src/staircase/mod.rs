@@ -26,6 +26,7 @@
 //!
 //! May use: [`crate::certify`], [`crate::problem`], [`crate::linalg`].
 
+pub mod candidate;
 pub mod init;
 pub mod manifold;
 
@@ -378,7 +379,8 @@ fn solve_anchored_here(
             })
             .map(rank_one)
     };
-    let solution = solve_from_start(&anchored.problem, chordal, options, observer)?;
+    let offer = |point: &Point| candidate::offer(|| anchored.poses(point, graph.poses[0]));
+    let solution = solve_from_start(&anchored.problem, chordal, options, &offer, observer)?;
     Some((solution, anchored))
 }
 
@@ -824,17 +826,20 @@ pub fn solve_from(
     observer: &mut dyn FnMut(&Iteration),
 ) -> StaircaseSolution {
     crate::linalg::parallel::alone_if_small(problem.terms.len(), || {
-        solve_from_start(problem, || Some(start), options, observer)
+        solve_from_start(problem, || Some(start), options, &|_| false, observer)
             .expect("a given start is always there")
     })
 }
 
 /// As [`solve_from`], from the rank-1 point that `start` computes (the chordal initialization) on
 /// this thread while a second core builds the pattern's analyses; `None` when `start` finds none.
+/// `offer` is shown the rank-1 point about to be certified first ([`candidate`]); it says whether
+/// it was taken.
 fn solve_from_start(
     problem: &Problem,
     start: impl FnOnce() -> Option<Point>,
     options: &StaircaseOptions,
+    offer: &dyn Fn(&Point) -> bool,
     observer: &mut dyn FnMut(&Iteration),
 ) -> Option<StaircaseSolution> {
     let n = problem.n;
@@ -987,6 +992,11 @@ fn solve_from_start(
     // estimate is optimal as far as double precision can tell; only a larger η (a clearly
     // negative eigenvalue of W̃(λ): a saddle, or a relaxation that is not exact) calls for the
     // staircase.
+    // The estimate as it stands, to a caller that starts work on it beside the certificate
+    // (the output file): the second core's, unless the certificate's factorization takes it.
+    if offer(&local.point) {
+        crate::linalg::parallel::let_idle_tasks_start();
+    }
     crate::progress::phase("certificate");
     let mut first = certifier.certify_rank_one(problem, &local.point, &local.lambda, reach_1);
     if certifier.isolated

@@ -539,16 +539,48 @@ pub fn write_atomic(
     let target = Path::new(path);
     // A device or a FIFO (/dev/null, /dev/stdout, a named pipe) is written in place: renaming a
     // temporary file over it would replace the device with a regular file.
-    if let Ok(meta) = std::fs::metadata(target)
-        && !meta.is_file()
-        && !meta.is_dir()
-    {
+    if in_place(target) {
         let file = std::fs::OpenOptions::new()
             .write(true)
             .open(target)
             .map_err(|e| Error::io(path, e))?;
         return write(&mut std::io::BufWriter::new(file), path);
     }
+    stage_file(path, write)?.persist()
+}
+
+/// Whether `target` is written in place: a device or a FIFO, which a renamed file would replace.
+fn in_place(target: &Path) -> bool {
+    std::fs::metadata(target).is_ok_and(|meta| !meta.is_file() && !meta.is_dir())
+}
+
+/// A file written in full to its temporary file beside its path ([`stage_graph`]) but not in
+/// place yet: [`Staged::persist`] renames it over the path; dropped instead, it is removed. The
+/// temporary file stays listed for [`remove_temporary_files`] meanwhile. For a file written
+/// while it is not yet known to be the one wanted: an estimate before its certificate.
+pub struct Staged {
+    tmp: tempfile::NamedTempFile,
+    path: String,
+    _listed: Pending,
+}
+
+impl Staged {
+    /// Puts the file in place: the rename over its path (as [`write_path`] ends).
+    pub fn persist(self) -> crate::Result<()> {
+        let Staged { tmp, path, _listed } = self;
+        tmp.persist(&path)
+            .map_err(|e| Error::io(&path, without_path(e.error)))?;
+        Ok(())
+    }
+}
+
+/// [`write_atomic`]'s temporary file, written by `write`, with its final permissions, not yet
+/// renamed.
+fn stage_file(
+    path: &str,
+    write: impl FnOnce(&mut dyn Write, &str) -> crate::Result<()>,
+) -> crate::Result<Staged> {
+    let target = Path::new(path);
     if target.is_dir() {
         // Else the rename of the temporary file over it fails with a less telling message.
         return Err(Error::Invalid(format!("{path}: is a directory")));
@@ -559,11 +591,53 @@ pub fn write_atomic(
         .suffix(".tmp")
         .tempfile_in(directory_of(target))
         .map_err(io)?;
-    let _listed = Pending::list(tmp.path());
+    let listed = Pending::list(tmp.path());
     write(&mut std::io::BufWriter::new(tmp.as_file()), path)?;
     set_default_permissions(tmp.path()).map_err(io)?;
-    tmp.persist(target).map_err(|e| io(e.error))?;
-    Ok(())
+    Ok(Staged {
+        tmp,
+        path: path.to_string(),
+        _listed: listed,
+    })
+}
+
+/// Whether [`stage_graph`] stages a file for `path`: not stdout, a device or a FIFO.
+pub fn stages(path: &str) -> bool {
+    path != "-" && !in_place(Path::new(path))
+}
+
+/// [`write_path_prepared`] up to the rename, for a path that names a regular file or nothing
+/// yet: the file written in full beside it and returned [`Staged`]. On Linux the system is
+/// asked to start writing the file's pages back (sync_file_range), as ext4 does at a rename over
+/// an existing file (its auto_da_alloc) and would do at [`Staged::persist`], so that the rename
+/// finds them under way. `None` for stdout, devices and FIFOs, which are written in place when
+/// the estimate is known ([`write_path_prepared`]).
+pub fn stage_graph(
+    graph: &PoseGraph,
+    vertigo: Option<&Vertigo>,
+    options: WriteOptions,
+    path: &str,
+    lines: Option<&ConstantLines>,
+) -> crate::Result<Option<Staged>> {
+    if !stages(path) {
+        return Ok(None);
+    }
+    let staged = stage_file(path, |out, name| {
+        write_named(graph, vertigo, options, lines, out, name)
+    })?;
+    #[cfg(target_os = "linux")]
+    // SAFETY: sync_file_range on the temporary file's open descriptor, the whole file; it
+    // reads and writes no memory of ours. A refusal leaves the writeback to the rename.
+    unsafe {
+        use std::os::fd::AsRawFd;
+        libc::sync_file_range(
+            staged.tmp.as_file().as_raw_fd(),
+            0,
+            0,
+            libc::SYNC_FILE_RANGE_WRITE,
+        );
+    }
+    Ok(Some(staged))
 }
 
 /// Writes a 3D graph to `out` in `format`, which must be the graph's form (quaternions are
