@@ -796,7 +796,9 @@ static PENDING: std::sync::Mutex<Vec<std::ffi::CString>> = std::sync::Mutex::new
 
 /// [`PENDING`], locked with the interrupt signals blocked on this thread ([`Pending`]'s changes):
 /// a handler on this thread never finds the list locked by the code it interrupted, and one on
-/// another thread waits a few instructions at most ([`remove_temporary_files`]).
+/// another thread waits a few instructions at most ([`remove_temporary_files`]). `change` must
+/// neither allocate nor free: the handler's thread may have been interrupted inside malloc,
+/// holding the lock that this thread would then wait for while the handler waits for the list.
 fn with_pending<R>(change: impl FnOnce(&mut Vec<std::ffi::CString>) -> R) -> R {
     let _blocked = interrupts::Blocked::new();
     let mut list = PENDING
@@ -816,18 +818,43 @@ impl Pending {
         // A path with a NUL byte cannot name a file, nor be created: nothing to remove then.
         let path =
             std::ffi::CString::new(path.into_os_string().into_encoded_bytes()).unwrap_or_default();
-        with_pending(|list| list.push(path.clone()));
+        let mut entry = Some(path.clone());
+        while let Some(path) = entry.take() {
+            // Pushed where the list has room; else a larger list is allocated out of the lock,
+            // the entries moved into it inside (no allocation), and the old one freed after.
+            let wanted = with_pending(|list| {
+                if list.len() < list.capacity() {
+                    list.push(path);
+                    None
+                } else {
+                    Some((path, 2 * list.capacity() + 4))
+                }
+            });
+            if let Some((path, capacity)) = wanted {
+                let mut larger = Vec::with_capacity(capacity);
+                with_pending(|list| {
+                    if list.len() < capacity {
+                        larger.append(list);
+                        std::mem::swap(list, &mut larger);
+                    }
+                });
+                drop(larger);
+                entry = Some(path);
+            }
+        }
         Pending(path)
     }
 }
 
 impl Drop for Pending {
     fn drop(&mut self) {
-        with_pending(|list| {
-            if let Some(k) = list.iter().rposition(|p| *p == self.0) {
-                list.swap_remove(k);
-            }
+        // Freed out of the lock.
+        let removed = with_pending(|list| {
+            list.iter()
+                .rposition(|p| *p == self.0)
+                .map(|k| list.swap_remove(k))
         });
+        drop(removed);
     }
 }
 
@@ -1101,6 +1128,29 @@ mod tests {
         assert!(!with_pending(|list| list
             .iter()
             .any(|p| p.to_bytes().starts_with(dir))));
+    }
+
+    /// The list grows out of its lock (its changes allocate nothing): forty files listed at
+    /// once are all in it, and none once dropped. (Not removed here: other tests write files
+    /// meanwhile, listed in the same list.)
+    #[test]
+    fn many_temporary_files_are_listed_and_unlisted() {
+        let dir = tempfile::tempdir().unwrap();
+        let paths: Vec<_> = (0..40)
+            .map(|k| dir.path().join(format!(".pgo-{k}.tmp")))
+            .collect();
+        let listed: Vec<_> = paths.iter().map(|p| Pending::list(p)).collect();
+        let bytes = dir.path().as_os_str().as_encoded_bytes();
+        let count = || {
+            with_pending(|list| {
+                list.iter()
+                    .filter(|p| p.to_bytes().starts_with(bytes))
+                    .count()
+            })
+        };
+        assert_eq!(count(), paths.len());
+        drop(listed);
+        assert_eq!(count(), 0);
     }
 
     /// The interrupt signals are blocked only while the list changes: the thread's mask after
