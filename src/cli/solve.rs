@@ -475,9 +475,11 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
         _ => None,
     };
     // The output file written ahead: where the lines are formatted ahead and the output is a
-    // regular file, the staircase's estimate is written to its temporary file on the second
-    // core while the certificate is computed ([`Ahead`]); put in place at the end where the
-    // solution's estimate is that one, bit for bit.
+    // regular file, the staircase's estimate is written to the output's temporary file on the
+    // second core while the certificate is computed ([`Ahead`]); put in place at the end where
+    // the solution's estimate is that one, bit for bit. Not for larger graphs: the write of a
+    // 23 MB file beside the certificate slowed it more than it saved (the 10⁵-pose world 1.03 of
+    // its time, 12 interleaved pairs; at 10⁶ poses -0.7 to +0.3 s of 14-16 s).
     let ahead = std::rc::Rc::new(std::cell::RefCell::new(None::<Ahead>));
     let taker = match (output, out_format) {
         (Some(path), Some(format)) if lines.is_some() && !args.refine && io::stages(path) => {
@@ -492,21 +494,21 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 if ahead.is_some() {
                     return;
                 }
+                let estimate = std::sync::Arc::new((poses.to_vec(), landmarks.to_vec()));
                 let (graph, slot, path) = (graph.clone(), slot.clone(), path.clone());
-                let (p, l) = (poses.to_vec(), landmarks.to_vec());
+                let written = std::sync::Arc::clone(&estimate);
                 let file = crate::linalg::parallel::when_idle(move || {
-                    let mut graph = (*graph).clone();
-                    with_estimate(&mut graph, &p, &l);
                     let options = WriteOptions {
                         format,
                         dialect: format.default_dialect(),
                     };
+                    let (poses, landmarks) = &*written;
+                    let estimate = io::Estimate { poses, landmarks };
                     let lines = slot.get().cloned();
-                    io::stage_graph(&graph, None, options, &path, lines.as_deref())
+                    io::stage_graph(&graph, estimate, None, options, &path, lines.as_deref())
                 });
                 *ahead = Some(Ahead {
-                    estimate: poses.to_vec(),
-                    landmarks: landmarks.to_vec(),
+                    estimate,
                     file: Some(file),
                 });
             });
@@ -564,16 +566,13 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     // The output written ahead, if it holds this estimate (else removed here).
     let staged = ahead.borrow_mut().take().and_then(|mut a| {
         let file = a.file.take()?.take();
-        let same = same_bits(&a.estimate, &solution.estimate)
-            && a.landmarks
+        let (poses, landmarks) = &*a.estimate;
+        let same = same_bits(poses, &solution.estimate)
+            && landmarks.iter().flatten().map(|v| v.to_bits()).eq(solution
+                .landmark_estimate
                 .iter()
                 .flatten()
-                .map(|v| v.to_bits())
-                .eq(solution
-                    .landmark_estimate
-                    .iter()
-                    .flatten()
-                    .map(|v| v.to_bits()));
+                .map(|v| v.to_bits()));
         // A write that failed is done again below, where its error is reported.
         same.then_some(file?.ok()?).flatten()
     });
@@ -1049,8 +1048,8 @@ const LINES_AHEAD_MAX: usize = 1 << 16;
 /// second core's task writing it to a temporary file. Dropped unused, it waits for a task
 /// running and removes its file: none is left behind when the solve ends elsewhere.
 struct Ahead {
-    estimate: Vec<crate::graph::Pose2>,
-    landmarks: Vec<[f64; 2]>,
+    /// The poses and landmark positions offered.
+    estimate: std::sync::Arc<(Vec<crate::graph::Pose2>, Vec<[f64; 2]>)>,
     file: Option<crate::linalg::parallel::Idle<pgo_io::Result<Option<io::Staged>>>>,
 }
 

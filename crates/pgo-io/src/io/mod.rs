@@ -23,9 +23,10 @@ pub use options::ReadOptions;
 pub use reader::{ReadReport, read, read_path};
 pub use reader3::read3;
 pub use writer::{
-    ConstantLines, Pending, Staged, WriteOptions, check_output, constant_lines, constant_lines3,
-    format_f64, remove_temporary_files, stage_graph, stages, write, write_atomic, write_bytes_path,
-    write_path, write_path_prepared, write_path_with, write3, write3_path, write3_path_prepared,
+    ConstantLines, Estimate, Pending, Staged, WriteOptions, check_output, constant_lines,
+    constant_lines3, format_f64, remove_temporary_files, stage_graph, stages, write, write_atomic,
+    write_bytes_path, write_path, write_path_prepared, write_path_with, write3, write3_path,
+    write3_path_prepared,
 };
 
 use crate::error::ParseErrorKind;

@@ -31,7 +31,34 @@ pub fn format_f64(v: f64, out: &mut Vec<u8>) {
 
 /// Writes `graph` to `out`.
 pub fn write<W: Write>(graph: &PoseGraph, options: WriteOptions, out: W) -> crate::Result<()> {
-    write_named(graph, None, options, None, out, "<stdout>")
+    write_named(
+        graph,
+        Estimate::of(graph),
+        None,
+        options,
+        None,
+        true,
+        out,
+        "<stdout>",
+    )
+}
+
+/// The values written on a graph's vertex lines: its poses and landmark positions, in its
+/// order (the graph's own, [`Estimate::of`], or a solver's beside it, [`stage_graph`]).
+#[derive(Clone, Copy)]
+pub struct Estimate<'a> {
+    pub poses: &'a [crate::graph::Pose2],
+    pub landmarks: &'a [[f64; 2]],
+}
+
+impl<'a> Estimate<'a> {
+    /// The graph's own poses and landmark positions.
+    pub fn of(graph: &'a PoseGraph) -> Self {
+        Estimate {
+            poses: &graph.poses,
+            landmarks: &graph.landmarks.positions,
+        }
+    }
 }
 
 /// The lines of a written graph that its estimate does not change, its edges' and its landmark
@@ -141,11 +168,17 @@ fn observation_line(graph: &PoseGraph, k: usize, buf: &mut Vec<u8>) {
     end_line(o.d.iter().chain(&o.information.0).copied(), buf);
 }
 
+/// Writes `graph` with `estimate` on its vertex lines to `out` (`name` in errors), the edges' and
+/// observations' lines from `lines` where they fit. `share`: whether the last edges' lines may be
+/// formatted on a thread of their own (not where this write itself runs beside other work).
+#[allow(clippy::too_many_arguments)]
 fn write_named<W: Write>(
     graph: &PoseGraph,
+    estimate: Estimate<'_>,
     vertigo: Option<&Vertigo>,
     options: WriteOptions,
     lines: Option<&ConstantLines>,
+    share: bool,
     mut out: W,
     name: &str,
 ) -> crate::Result<()> {
@@ -173,7 +206,18 @@ fn write_named<W: Write>(
             graph.noise, options.dialect
         )));
     }
-    check_finite(graph)?;
+    if estimate.poses.len() != graph.poses.len()
+        || estimate.landmarks.len() != graph.landmarks.positions.len()
+    {
+        return Err(Error::Invalid(format!(
+            "an estimate of {} poses and {} landmarks for a graph of {} and {}",
+            estimate.poses.len(),
+            estimate.landmarks.len(),
+            graph.poses.len(),
+            graph.landmarks.positions.len()
+        )));
+    }
+    check_finite(graph, estimate)?;
     if options.format == Format::Toro && !graph.landmarks.is_empty() {
         return Err(Error::Invalid(format!(
             "TORO has no landmark type: this graph has {} landmarks; write it as g2o (VERTEX_XY, EDGE_SE2_XY) instead",
@@ -216,8 +260,9 @@ fn write_named<W: Write>(
     } else {
         graph.edges.len()
     };
-    let split =
-        m >= PARALLEL_EDGES && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    let split = share
+        && m >= PARALLEL_EDGES
+        && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
     let mid = if split {
         m.saturating_sub(graph.poses.len() / 3) / 2
     } else {
@@ -233,13 +278,13 @@ fn write_named<W: Write>(
                 last
             })
         });
-        for (id, pose) in graph.ids.iter().zip(&graph.poses) {
+        for (id, pose) in graph.ids.iter().zip(estimate.poses) {
             buf.extend_from_slice(vertex_tag.as_bytes());
             let _ = write!(buf, " {id}");
             end_line(pose.values(), &mut buf);
             put(&mut buf, &mut out)?;
         }
-        for (id, p) in marks.ids.iter().zip(&marks.positions) {
+        for (id, p) in marks.ids.iter().zip(estimate.landmarks) {
             buf.extend_from_slice(landmark_vertex.as_bytes());
             let _ = write!(buf, " {id}");
             end_line(p.iter().copied(), &mut buf);
@@ -356,8 +401,8 @@ impl EdgeLines<'_> {
     }
 }
 
-fn check_finite(graph: &PoseGraph) -> crate::Result<()> {
-    if let Some(k) = graph
+fn check_finite(graph: &PoseGraph, estimate: Estimate<'_>) -> crate::Result<()> {
+    if let Some(k) = estimate
         .poses
         .iter()
         .position(|p| !p.values().iter().all(|v| v.is_finite()))
@@ -380,8 +425,8 @@ fn check_finite(graph: &PoseGraph) -> crate::Result<()> {
         )));
     }
     let marks = &graph.landmarks;
-    if let Some(k) = marks
-        .positions
+    if let Some(k) = estimate
+        .landmarks
         .iter()
         .position(|p| !p.iter().all(|v| v.is_finite()))
     {
@@ -501,7 +546,16 @@ pub fn write_path_prepared(
     lines: Option<&ConstantLines>,
 ) -> crate::Result<()> {
     write_atomic(path, |out, name| {
-        write_named(graph, vertigo, options, lines, out, name)
+        write_named(
+            graph,
+            Estimate::of(graph),
+            vertigo,
+            options,
+            lines,
+            true,
+            out,
+            name,
+        )
     })
 }
 
@@ -607,13 +661,16 @@ pub fn stages(path: &str) -> bool {
 }
 
 /// [`write_path_prepared`] up to the rename, for a path that names a regular file or nothing
-/// yet: the file written in full beside it and returned [`Staged`]. On Linux the system is
+/// yet, with `estimate` on the vertex lines (no copy of the graph needed): the file written in
+/// full beside it, every line formatted on this thread (it writes beside other work), and
+/// returned [`Staged`]. On Linux the system is
 /// asked to start writing the file's pages back (sync_file_range), as ext4 does at a rename over
 /// an existing file (its auto_da_alloc) and would do at [`Staged::persist`], so that the rename
 /// finds them under way. `None` for stdout, devices and FIFOs, which are written in place when
 /// the estimate is known ([`write_path_prepared`]).
 pub fn stage_graph(
     graph: &PoseGraph,
+    estimate: Estimate<'_>,
     vertigo: Option<&Vertigo>,
     options: WriteOptions,
     path: &str,
@@ -623,7 +680,7 @@ pub fn stage_graph(
         return Ok(None);
     }
     let staged = stage_file(path, |out, name| {
-        write_named(graph, vertigo, options, lines, out, name)
+        write_named(graph, estimate, vertigo, options, lines, false, out, name)
     })?;
     #[cfg(target_os = "linux")]
     // SAFETY: sync_file_range on the temporary file's open descriptor, the whole file; it
@@ -1018,6 +1075,68 @@ mod tests {
     /// [`write3_path`] writes, byte for byte; lines made for a graph with an edge less, or a
     /// planar graph's lines, are not used, and the format that is not the graph's form has no
     /// lines (and the write is refused as before).
+    /// A file staged with an estimate beside the graph holds what `write_path` writes for the
+    /// graph carrying that estimate, byte for byte, once persisted (a graph with landmarks and
+    /// FIX; poses and positions moved, so the graph's own would not do); an estimate of another
+    /// size is refused; stdout and devices are not staged.
+    #[test]
+    fn a_staged_file_is_the_written_file_of_its_estimate() {
+        let text = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1.5 0.25 0.125\nVERTEX_XY 7 2 3\n\
+            EDGE_SE2 0 1 1.5 0.25 0.125 10 0.5 0 20 0.25 30\n\
+            EDGE_SE2_XY 0 7 2 3 4 0.5 5\nEDGE_SE2_XY 1 7 0.5 2.75 6 -0.5 7\nFIX 0\n";
+        let (graph, _) =
+            super::super::read(text.as_bytes(), "in.g2o", &Default::default()).unwrap();
+        let poses: Vec<_> = graph
+            .poses
+            .iter()
+            .map(|p| crate::graph::Pose2 {
+                x: p.x + 0.1,
+                y: p.y - 1e-9,
+                theta: p.theta + 3.0,
+            })
+            .collect();
+        let landmarks = vec![[2.5, -3.25]];
+        let mut moved = graph.clone();
+        moved.poses.clone_from(&poses);
+        moved.landmarks.positions.clone_from(&landmarks);
+        let dir = tempfile::tempdir().unwrap();
+        let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        let options = WriteOptions {
+            format: Format::G2o,
+            dialect: Dialect::G2o,
+        };
+        write_path(&moved, options, &path("written.g2o")).unwrap();
+        let estimate = Estimate {
+            poses: &poses,
+            landmarks: &landmarks,
+        };
+        let staged = stage_graph(&graph, estimate, None, options, &path("staged.g2o"), None);
+        staged.unwrap().unwrap().persist().unwrap();
+        assert_eq!(
+            std::fs::read(path("staged.g2o")).unwrap(),
+            std::fs::read(path("written.g2o")).unwrap()
+        );
+        let mut own = Vec::new();
+        write(&graph, options, &mut own).unwrap();
+        assert_ne!(std::fs::read(path("staged.g2o")).unwrap(), own);
+        let short = Estimate {
+            poses: &poses[..1],
+            landmarks: &landmarks,
+        };
+        assert!(stage_graph(&graph, short, None, options, &path("short.g2o"), None).is_err());
+        assert!(
+            stage_graph(&graph, estimate, None, options, "-", None)
+                .unwrap()
+                .is_none()
+        );
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".pgo-"))
+            .collect();
+        assert!(names.is_empty(), "{names:?}");
+    }
+
     #[test]
     fn lines_formatted_ahead_write_the_same_3d_file() {
         let info = "1 0 0 0 0 0 2 0 0 0 0 3 0 0 0 4 0 0 5 0 6.5";
