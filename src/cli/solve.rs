@@ -579,7 +579,13 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let mut graph = dropped.unwrap_or_else(|| {
         std::sync::Arc::try_unwrap(shared).unwrap_or_else(|graph| (*graph).clone())
     });
-    with_estimate(&mut graph, &solution.estimate, &solution.landmark_estimate);
+    graph.poses.clone_from(&solution.estimate);
+    graph.vertices_declared = true;
+    graph
+        .landmarks
+        .positions
+        .clone_from(&solution.landmark_estimate);
+    graph.landmarks.declared = true;
     rec.optimized(&graph, options.weights);
     if let Some((mut all_edges, rejected, residuals, iterations)) = gnc_view {
         // Every edge as read (also under --drop-outliers), at the estimate.
@@ -1065,20 +1071,6 @@ impl Drop for Ahead {
 fn same_bits(a: &[crate::graph::Pose2], b: &[crate::graph::Pose2]) -> bool {
     let bits = |p: &crate::graph::Pose2| [p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()];
     a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
-}
-
-/// `graph` holding the solved `poses` and `landmarks` as the output declares them.
-fn with_estimate(
-    graph: &mut crate::graph::PoseGraph,
-    poses: &[crate::graph::Pose2],
-    landmarks: &[[f64; 2]],
-) {
-    graph.poses.clear();
-    graph.poses.extend_from_slice(poses);
-    graph.vertices_declared = true;
-    graph.landmarks.positions.clear();
-    graph.landmarks.positions.extend_from_slice(landmarks);
-    graph.landmarks.declared = true;
 }
 
 /// Writes the solved graph to `path` in `format`, its edge and observation lines from `lines`
