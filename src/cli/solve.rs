@@ -461,10 +461,7 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                     .contains(&(shared.edges.len() + shared.landmarks.observations.len())) =>
         {
             let graph = std::sync::Arc::clone(&shared);
-            let options = WriteOptions {
-                format,
-                dialect: format.default_dialect(),
-            };
+            let options = WriteOptions::of(format);
             let slot = std::sync::Arc::clone(&lines_ahead);
             Some(crate::linalg::parallel::when_idle(move || {
                 let lines = std::sync::Arc::new(io::constant_lines(&graph, None, options));
@@ -498,13 +495,10 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
                 let (graph, slot, path) = (graph.clone(), slot.clone(), path.clone());
                 let written = std::sync::Arc::clone(&estimate);
                 let file = crate::linalg::parallel::when_idle(move || {
-                    let options = WriteOptions {
-                        format,
-                        dialect: format.default_dialect(),
-                    };
                     let (poses, landmarks) = &*written;
                     let estimate = io::Estimate { poses, landmarks };
                     let lines = slot.get().cloned();
+                    let options = WriteOptions::of(format);
                     io::stage_graph(&graph, estimate, None, options, &path, lines.as_deref())
                 });
                 *ahead = Some(Ahead {
@@ -565,16 +559,14 @@ pub fn run(args: &Args) -> crate::Result<ExitCode> {
     let lines = lines.and_then(|l| l.take());
     // The output written ahead, if it holds this estimate (else removed here).
     let staged = ahead.borrow_mut().take().and_then(|mut a| {
+        // Waited for where it runs: a file not kept is removed before the output is written.
         let file = a.file.take()?.take();
         let (poses, landmarks) = &*a.estimate;
-        let same = same_bits(poses, &solution.estimate)
-            && landmarks.iter().flatten().map(|v| v.to_bits()).eq(solution
-                .landmark_estimate
-                .iter()
-                .flatten()
-                .map(|v| v.to_bits()));
+        if !same_bits(poses, landmarks, &solution) {
+            return None;
+        }
         // A write that failed is done again below, where its error is reported.
-        same.then_some(file?.ok()?).flatten()
+        file?.ok()?
     });
     let mut graph = dropped.unwrap_or_else(|| {
         std::sync::Arc::try_unwrap(shared).unwrap_or_else(|graph| (*graph).clone())
@@ -1067,10 +1059,15 @@ impl Drop for Ahead {
     }
 }
 
-/// Whether two estimates are the same bits.
-fn same_bits(a: &[crate::graph::Pose2], b: &[crate::graph::Pose2]) -> bool {
-    let bits = |p: &crate::graph::Pose2| [p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()];
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+/// Whether `poses` and `landmarks` are the solution's estimate, bit for bit.
+fn same_bits(poses: &[crate::graph::Pose2], landmarks: &[[f64; 2]], solution: &Solution) -> bool {
+    let values = |poses: &[crate::graph::Pose2], landmarks: &[[f64; 2]]| {
+        let poses = poses.iter().flat_map(|p| [p.x, p.y, p.theta]);
+        let landmarks = landmarks.iter().flatten().copied();
+        poses.chain(landmarks).map(f64::to_bits).collect::<Vec<_>>()
+    };
+    poses.len() == solution.estimate.len()
+        && values(poses, landmarks) == values(&solution.estimate, &solution.landmark_estimate)
 }
 
 /// Writes the solved graph to `path` in `format`, its edge and observation lines from `lines`
@@ -1086,14 +1083,7 @@ fn write_graph(
     graph
         .convert_noise(NoiseKind::Information)
         .map_err(|_| Error::Invalid("a covariance matrix is singular".into()))?;
-    let dialect = format.default_dialect();
-    io::write_path_prepared(
-        graph,
-        vertigo,
-        WriteOptions { format, dialect },
-        path,
-        lines,
-    )?;
+    io::write_path_prepared(graph, vertigo, WriteOptions::of(format), path, lines)?;
     Ok(())
 }
 

@@ -18,6 +18,16 @@ pub struct WriteOptions {
     pub dialect: Dialect,
 }
 
+impl WriteOptions {
+    /// `format` in its default dialect ([`Format::default_dialect`]).
+    pub fn of(format: Format) -> Self {
+        WriteOptions {
+            format,
+            dialect: format.default_dialect(),
+        }
+    }
+}
+
 /// Appends the shortest decimal that parses back to exactly `v`, by the Żmij algorithm (the
 /// `zmij` crate, several times faster than the standard library's formatting): plain notation
 /// for 1e-5 <= |v| < 1e16 (without a trailing `.0`), exponent notation (`1e-7`, `1.5e+300`)
@@ -135,10 +145,7 @@ pub fn constant_lines3(graph: &Graph3, format: Format) -> Option<ConstantLines> 
         edge_line3(graph, edge_tag, e, &mut edge_lines);
     }
     Some(ConstantLines {
-        options: WriteOptions {
-            format,
-            dialect: format.default_dialect(),
-        },
+        options: WriteOptions::of(format),
         spatial: true,
         edges: graph.edges.len(),
         observations: 0,
@@ -663,11 +670,11 @@ pub fn stages(path: &str) -> bool {
 /// [`write_path_prepared`] up to the rename, for a path that names a regular file or nothing
 /// yet, with `estimate` on the vertex lines (no copy of the graph needed): the file written in
 /// full beside it, every line formatted on this thread (it writes beside other work), and
-/// returned [`Staged`]. On Linux the system is
-/// asked to start writing the file's pages back (sync_file_range), as ext4 does at a rename over
-/// an existing file (its auto_da_alloc) and would do at [`Staged::persist`], so that the rename
-/// finds them under way. `None` for stdout, devices and FIFOs, which are written in place when
-/// the estimate is known ([`write_path_prepared`]).
+/// returned [`Staged`]. On Linux the system is asked to start writing the file's pages back
+/// (sync_file_range), as ext4 does at a rename over an existing file (its auto_da_alloc) and
+/// would do at [`Staged::persist`], so that the rename finds them under way. `None` for stdout,
+/// devices and FIFOs, which are written in place when the estimate is known
+/// ([`write_path_prepared`]).
 pub fn stage_graph(
     graph: &PoseGraph,
     estimate: Estimate<'_>,
@@ -875,29 +882,26 @@ impl Pending {
         // A path with a NUL byte cannot name a file, nor be created: nothing to remove then.
         let path =
             std::ffi::CString::new(path.into_os_string().into_encoded_bytes()).unwrap_or_default();
-        let mut entry = Some(path.clone());
-        while let Some(path) = entry.take() {
-            // Pushed where the list has room; else a larger list is allocated out of the lock,
-            // the entries moved into it inside (no allocation), and the old one freed after.
-            let wanted = with_pending(|list| {
-                if list.len() < list.capacity() {
-                    list.push(path);
-                    None
-                } else {
-                    Some((path, 2 * list.capacity() + 4))
+        let mut entry = path.clone();
+        // Pushed where the list has room; else a larger list is allocated out of the lock, the
+        // entries moved into it inside (no allocation), and the old one freed after.
+        while let Err((back, capacity)) = with_pending(|list| {
+            if list.len() < list.capacity() {
+                list.push(entry);
+                Ok(())
+            } else {
+                Err((entry, 2 * list.capacity() + 4))
+            }
+        }) {
+            let mut larger = Vec::with_capacity(capacity);
+            with_pending(|list| {
+                if list.len() < capacity {
+                    larger.append(list);
+                    std::mem::swap(list, &mut larger);
                 }
             });
-            if let Some((path, capacity)) = wanted {
-                let mut larger = Vec::with_capacity(capacity);
-                with_pending(|list| {
-                    if list.len() < capacity {
-                        larger.append(list);
-                        std::mem::swap(list, &mut larger);
-                    }
-                });
-                drop(larger);
-                entry = Some(path);
-            }
+            drop(larger);
+            entry = back;
         }
         Pending(path)
     }
@@ -1070,11 +1074,6 @@ mod tests {
         }
     }
 
-    /// The same for 3D graphs ([`constant_lines3`], [`write3_path_prepared`]): a g2o graph
-    /// (quaternions, with a FIX and a repeated edge) and a TORO one (Euler angles) give the file
-    /// [`write3_path`] writes, byte for byte; lines made for a graph with an edge less, or a
-    /// planar graph's lines, are not used, and the format that is not the graph's form has no
-    /// lines (and the write is refused as before).
     /// A file staged with an estimate beside the graph holds what `write_path` writes for the
     /// graph carrying that estimate, byte for byte, once persisted (a graph with landmarks and
     /// FIX; poses and positions moved, so the graph's own would not do); an estimate of another
@@ -1137,6 +1136,11 @@ mod tests {
         assert!(names.is_empty(), "{names:?}");
     }
 
+    /// The same for 3D graphs ([`constant_lines3`], [`write3_path_prepared`]): a g2o graph
+    /// (quaternions, with a FIX and a repeated edge) and a TORO one (Euler angles) give the file
+    /// [`write3_path`] writes, byte for byte; lines made for a graph with an edge less, or a
+    /// planar graph's lines, are not used, and the format that is not the graph's form has no
+    /// lines (and the write is refused as before).
     #[test]
     fn lines_formatted_ahead_write_the_same_3d_file() {
         let info = "1 0 0 0 0 0 2 0 0 0 0 3 0 0 0 4 0 0 5 0 6.5";
