@@ -49,11 +49,13 @@ pub fn after_help(examples: &str) -> String {
 
 /// Runs a tool body: prints an error as `pgo-TOOL: message` (input errors already carry
 /// `PATH:LINE:COL`) and maps it to exit status 2; a closed pipe is status 141, silently.
-/// Interrupts are handled from here on ([`signals::install`]), and the allocator keeps freed
-/// blocks for reuse ([`memory::tune`]).
+/// Interrupts are handled from here on ([`signals::install`]), the allocator keeps freed
+/// blocks for reuse ([`memory::tune`]), and an output's rename leaves the file it replaces to be
+/// closed beside ([`close_beside`]).
 pub fn run_tool(name: &str, body: impl FnOnce() -> crate::Result<ExitCode>) -> ExitCode {
     memory::tune();
     signals::install();
+    crate::io::hand_replaced_files_to(close_beside);
     match body() {
         Ok(code) => code,
         Err(crate::Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::BrokenPipe => {
@@ -71,6 +73,15 @@ pub fn run_tool(name: &str, body: impl FnOnce() -> crate::Result<ExitCode>) -> E
             ExitCode::from(EXIT_ERROR)
         }
     }
+}
+
+/// Closes an output file that a rename replaced ([`crate::io::hand_replaced_files_to`]) on the
+/// second core's thread where it runs, which then frees the file's data (0.2 to 0.4 ms on ext4
+/// for 130 to 690 KB) while this thread reports and ends the tool; here where it does not.
+fn close_beside(replaced: std::fs::File) {
+    crate::linalg::parallel::in_background_if_started([
+        Box::new(move || drop(replaced)) as Box<dyn FnOnce() + Send>
+    ]);
 }
 
 /// Prints the reader's warnings on stderr.

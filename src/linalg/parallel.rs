@@ -453,6 +453,16 @@ pub fn in_background(tasks: impl IntoIterator<Item = Box<dyn FnOnce() + Send + '
     }
 }
 
+/// [`in_background`] where the second core's thread runs already; else `tasks` are dropped
+/// unrun here (no thread is started for them).
+pub fn in_background_if_started(
+    tasks: impl IntoIterator<Item = Box<dyn FnOnce() + Send + 'static>>,
+) {
+    if let Some(worker) = started_worker() {
+        worker.leave(tasks);
+    }
+}
+
 /// Drops the tasks that [`in_background`] left and the second core has not started.
 pub fn drop_background() {
     if let Some(worker) = started_worker() {

@@ -24,9 +24,9 @@ pub use reader::{ReadReport, read, read_path};
 pub use reader3::read3;
 pub use writer::{
     ConstantLines, Estimate, Pending, Staged, WriteOptions, check_output, constant_lines,
-    constant_lines3, format_f64, remove_temporary_files, stage_graph, stages, write, write_atomic,
-    write_bytes_path, write_path, write_path_prepared, write_path_with, write3, write3_path,
-    write3_path_prepared,
+    constant_lines3, format_f64, hand_replaced_files_to, remove_temporary_files, stage_graph,
+    stages, write, write_atomic, write_bytes_path, write_path, write_path_prepared,
+    write_path_with, write3, write3_path, write3_path_prepared,
 };
 
 use crate::error::ParseErrorKind;

@@ -626,12 +626,51 @@ pub struct Staged {
 }
 
 impl Staged {
-    /// Puts the file in place: the rename over its path (as [`write_path`] ends).
+    /// Puts the file in place: the rename over its path (as [`write_path`] ends). The file it
+    /// replaces goes to the hand given to [`hand_replaced_files_to`], if any.
     pub fn persist(self) -> crate::Result<()> {
         let Staged { tmp, path, _listed } = self;
+        let hand = REPLACED.get();
+        let replaced = hand.and_then(|_| hold(&path));
         tmp.persist(&path)
             .map_err(|e| Error::io(&path, without_path(e.error)))?;
+        if let (Some(hand), Some(file)) = (hand, replaced) {
+            hand(file);
+        }
         Ok(())
+    }
+}
+
+/// Where [`Staged::persist`] hands the file that its rename replaces ([`hand_replaced_files_to`]).
+static REPLACED: std::sync::OnceLock<fn(std::fs::File)> = std::sync::OnceLock::new();
+
+/// Has every rename of an output over its path ([`write_path`], [`write_atomic`],
+/// [`Staged::persist`]) hand the file it replaces, held open, to `hand` (once per process; a
+/// second call changes nothing). The replaced file's data are freed when its last descriptor
+/// closes, not in the rename: on ext4 a rename over a file of 130 to 690 KB took 0.2 to 0.4 ms
+/// (its blocks freed), to a new name or over a file held open 0.02 ms. A tool hands it to a
+/// thread with time to spare; without a hand the path is not opened and the rename frees the
+/// file as before. Linux only (an `O_PATH` descriptor, which needs no permission to read).
+pub fn hand_replaced_files_to(hand: fn(std::fs::File)) {
+    let _ = REPLACED.set(hand);
+}
+
+/// The file at `path` itself (not a symbolic link's target), held open without reading it;
+/// `None` where there is none or elsewhere than Linux.
+fn hold(path: &str) -> Option<std::fs::File> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_PATH | libc::O_NOFOLLOW)
+            .open(path)
+            .ok()
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = path;
+        None
     }
 }
 
@@ -1134,6 +1173,62 @@ mod tests {
             .filter(|n| n.starts_with(".pgo-"))
             .collect();
         assert!(names.is_empty(), "{names:?}");
+    }
+
+    /// A rename over an existing output hands the file it replaced to the hand, held open: the
+    /// old file itself (its inode, as the system reports it before the write), no longer named
+    /// (no link left) and still holding its old bytes, while the path holds the new ones. A
+    /// symbolic link at the path is replaced itself, its target untouched; a new path hands
+    /// nothing. (The hand is the process's, shared by the tests: the files are told apart by
+    /// their inodes.)
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_rename_hands_over_the_file_it_replaced() {
+        use std::io::Read;
+        use std::os::unix::fs::MetadataExt;
+        static HANDED: std::sync::Mutex<Vec<std::fs::File>> = std::sync::Mutex::new(Vec::new());
+        hand_replaced_files_to(|file| HANDED.lock().unwrap().push(file));
+        let handed = |ino: u64| {
+            let mut files = HANDED.lock().unwrap();
+            let k = files
+                .iter()
+                .position(|f| f.metadata().unwrap().ino() == ino)?;
+            Some(files.swap_remove(k))
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.txt");
+        let name = path.to_str().unwrap();
+        write_bytes_path(b"old bytes\n", name).unwrap();
+        let old = std::fs::metadata(&path).unwrap().ino();
+        write_bytes_path(b"new bytes\n", name).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new bytes\n");
+        assert_ne!(std::fs::metadata(&path).unwrap().ino(), old);
+        let file = handed(old).expect("the replaced file is handed over");
+        let meta = file.metadata().unwrap();
+        assert_eq!((meta.nlink(), meta.len()), (0, 10));
+        // Its bytes, read through the process's own link to the open file.
+        let fd = std::os::fd::AsRawFd::as_raw_fd(&file);
+        let mut bytes = Vec::new();
+        std::fs::File::open(format!("/proc/self/fd/{fd}"))
+            .unwrap()
+            .read_to_end(&mut bytes)
+            .unwrap();
+        assert_eq!(bytes, b"old bytes\n");
+        // A symbolic link: replaced, not followed.
+        let target = dir.path().join("target.txt");
+        std::fs::write(&target, "target\n").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let link_ino = std::fs::symlink_metadata(&link).unwrap().ino();
+        write_bytes_path(b"over the link\n", link.to_str().unwrap()).unwrap();
+        assert!(handed(link_ino).is_some());
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_file());
+        assert_eq!(std::fs::read(&target).unwrap(), b"target\n");
+        assert_eq!(std::fs::metadata(&target).unwrap().nlink(), 1);
+        // A new path: nothing handed (nothing is at the new file's inode before its write).
+        let fresh = dir.path().join("fresh.txt");
+        write_bytes_path(b"fresh\n", fresh.to_str().unwrap()).unwrap();
+        assert!(handed(std::fs::metadata(&fresh).unwrap().ino()).is_none());
     }
 
     /// The same for 3D graphs ([`constant_lines3`], [`write3_path_prepared`]): a g2o graph
