@@ -760,7 +760,12 @@ pub fn ahead<S: Send, A: Send, C: Send, R>(
             // A closed channel only means that `main` did not wait for the result.
             let _ = send.send(first());
             run_spare.run(spare_task);
-            then()
+            let c = then();
+            // A task offered after the work's last pause ([`join_or_offer`]: a split
+            // factorization's second side, offered while this core was busy) runs here before the
+            // core counts as idle, instead of waiting on offer for this thread to take it back.
+            take_offer();
+            c
         },
     )
 }
@@ -843,6 +848,42 @@ mod tests {
             },
         );
         assert!(busy);
+    }
+
+    /// A task offered while work built ahead runs, after that work's last pause, is run by the
+    /// second core once the work is done, not left on offer for this thread to take back: `a`
+    /// waits (up to a minute) for `b` to start elsewhere, and `b` runs on another thread.
+    #[test]
+    fn an_offer_left_after_the_last_pause_runs_on_the_second_core() {
+        if !second_core() {
+            return;
+        }
+        let caller = std::thread::current().id();
+        let (offered, wait_offered) = std::sync::mpsc::channel::<()>();
+        let (started, wait_started) = std::sync::mpsc::channel::<()>();
+        let ((b_started_first, b_thread), ()) = ahead(
+            || (),
+            || (),
+            move || {
+                let _ = wait_offered.recv();
+            },
+            |_, _| {
+                join_or_offer(
+                    || {
+                        let _ = offered.send(());
+                        wait_started
+                            .recv_timeout(std::time::Duration::from_secs(60))
+                            .is_ok()
+                    },
+                    move || {
+                        let _ = started.send(());
+                        std::thread::current().id()
+                    },
+                )
+            },
+        );
+        assert!(b_started_first);
+        assert_ne!(b_thread, caller);
     }
 
     /// An offer taken at a pause runs on the thread that paused, while `a` still runs here, and
