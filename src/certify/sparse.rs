@@ -88,13 +88,15 @@ struct RowSums {
 
 /// W̃(λ)'s second eigenvalue hidden by the rounding ([`SparseCertifier::hidden_gap`]): D W̃(λ) D
 /// − μI (D the equilibration, diagonal in [1, 4)) showed at most one negative pivot at the shift
-/// μ = `shift`, but the factorization's error bound `error` was at least μ, so neither the gap
-/// nor its absence is proven; and the double-double retry could not prove it either, or was not
-/// run (`precise_limit`: the factor's `factor_entries` exceed it).
+/// μ = `shift`, but the factorization's error bound `error` was at least μ, and so was the error
+/// `measured` a posteriori (plus the assembly's rounding) where it was measured, so neither the
+/// gap nor its absence is proven; and the double-double retry could not prove it either, or was
+/// not run (`precise_limit`: the factor's `factor_entries` exceed it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HiddenGap {
     pub shift: f64,
     pub error: f64,
+    pub measured: Option<f64>,
     pub factor_entries: usize,
     pub precise_limit: Option<usize>,
 }
@@ -403,13 +405,19 @@ impl SparseCertifier {
             Ladder::Found {
                 theta, negative, ..
             } => Some(Gap::new(negative, theta)),
-            // Double precision's rounding hides the gap: the same shift in double-double.
+            // The a-priori bound on double precision's rounding hides the gap: the error measured
+            // at the same shift, then the shift in double-double.
             Ladder::Hidden { mu, floor } => {
+                let measured = match self.measured_gap(lambda, scale, mu, assembly) {
+                    Ok(gap) => return Some(gap),
+                    Err(measured) => measured,
+                };
                 let gap = self.precise_gap(lambda, scale, mu, assembly);
                 if gap.is_none() {
                     self.hidden = Some(HiddenGap {
                         shift: mu,
                         error: floor,
+                        measured,
                         factor_entries: self.factor.stored_entries(),
                         precise_limit: (self.precise.is_none()).then_some(PRECISE_MAX_ENTRIES),
                     });
@@ -471,6 +479,18 @@ impl SparseCertifier {
         scale: &[f64],
         mu: f64,
     ) -> Option<Option<(usize, f64)>> {
+        let factored = self.ldlt_shifted(lambda, scale, mu)?;
+        Some(factored.map(|(negative, form)| (negative, self.factor.ldlt_backward_error() + form)))
+    }
+
+    /// The LDLᴴ of [`Self::inertia_at`]: `Some((negative pivots, the rounding of the shifted
+    /// diagonal))`.
+    fn ldlt_shifted(
+        &mut self,
+        lambda: &[f64],
+        scale: &[f64],
+        mu: f64,
+    ) -> Option<Option<(usize, f64)>> {
         let rot0 = self.dim() - lambda.len();
         let mut form = f64::MIN_POSITIVE;
         let mut finite = true;
@@ -497,8 +517,37 @@ impl SparseCertifier {
         {
             return Some(None);
         }
-        let negative = self.factor.inertia_below(0.0);
-        Some(Some((negative, self.factor.ldlt_backward_error() + form)))
+        Some(Some((self.factor.inertia_below(0.0), form)))
+    }
+
+    /// [`Self::gap`] at a shift `mu` where the ladder found at most one negative pivot but the
+    /// a-priori error bound hid the gap: the same LDLᴴ again, its error measured instead
+    /// ([`SparseFactor::ldlt_residual_bound`]: the residual of the stored factors, within some
+    /// 50 units of rounding per entry where the a-priori bound counts 2k + 8, k up to thousands
+    /// in the top separators of 10⁶ poses and more: at 10⁶ 1.7e-13 against 3.3e-11).
+    /// `Err(measured)` where it did not prove the gap either (`None`: not measured).
+    fn measured_gap(
+        &mut self,
+        lambda: &[f64],
+        scale: &[f64],
+        mu: f64,
+        assembly: f64,
+    ) -> Result<Gap, Option<f64>> {
+        let Some(Some((negative, form))) = self.ldlt_shifted(lambda, scale, mu) else {
+            return Err(None);
+        };
+        if negative > 1 {
+            return Err(None);
+        }
+        let a = factored(&self.upper, &self.permuted, &self.values);
+        let measured = self.factor.ldlt_residual_bound(a).ok_or(None)? + form;
+        let theta = mu - measured - assembly;
+        if theta > 0.0 {
+            self.shifts.remember_shift(mu);
+            Ok(Gap::new(negative, theta))
+        } else {
+            Err(Some(measured))
+        }
     }
 
     /// [`Self::gap`] at shift `mu` (and at most two shifts 8 and 64 times smaller while more than
@@ -1095,7 +1144,9 @@ mod tests {
     /// eigenvalues its verdict must follow the count of eigenvalues below μ: at most one below μ
     /// (or below μ/8, μ/64, its two retries) proves θ ≤ μ with that count (Definite for none,
     /// Isolated for one), θ within the rounding of μ; two or more below all three shifts prove
-    /// nothing. The double-precision LDLᴴ at the same shifts must count the same pivots.
+    /// nothing. The double-precision LDLᴴ at the same shifts must count the same pivots, and its
+    /// measured error ([`SparseCertifier::measured_gap`]) prove the gap where at most one lies
+    /// below μ and nothing where more do.
     #[test]
     fn the_double_double_gap_follows_the_dense_eigenvalues() {
         let sim = simulate(&SimulationConfig {
@@ -1126,6 +1177,7 @@ mod tests {
             / lambda.len() as f64;
         let lowered: Vec<f64> = lambda.iter().map(|l| l - delta).collect();
         let mut proven = [0; 2];
+        let mut measured = [0; 2];
         let mut unproven = 0;
         for (k, lambda) in [&lambda, &lowered].into_iter().enumerate() {
             let (_, scale) = certifier.scaling(lambda, 0.0, true).unwrap();
@@ -1189,6 +1241,27 @@ mod tests {
                     }
                     _ => panic!("μ = {mu:e}: {gap:?}, expected a proof at {expected:?}"),
                 }
+                // The error measured at μ itself (SparseFactor::ldlt_residual_bound) proves the
+                // gap exactly where at most one eigenvalue lies below μ, θ within it of μ.
+                match (
+                    below(mu),
+                    certifier.measured_gap(lambda, &scale, mu, assembly),
+                ) {
+                    (n @ (0 | 1), Ok(gap)) => {
+                        let (negative, theta) = match gap {
+                            Gap::Definite(theta) => (0, theta),
+                            Gap::Isolated(theta) => (1, theta),
+                        };
+                        assert_eq!(n, negative, "μ = {mu:e}");
+                        assert!(
+                            theta > 0.0 && theta <= mu && theta >= mu - 1e-12,
+                            "{theta:e}"
+                        );
+                        measured[n] += 1;
+                    }
+                    (2.., Err(_)) => {}
+                    (n, g) => panic!("μ = {mu:e}: {n} below, measured {g:?}"),
+                }
             }
         }
         // Both kinds of proof were reached, and shifts that prove nothing.
@@ -1196,6 +1269,7 @@ mod tests {
             proven[0] > 0 && proven[1] > 0 && unproven > 0,
             "{proven:?} {unproven}"
         );
+        assert!(measured[0] > 0 && measured[1] > 0, "{measured:?}");
     }
 
     /// W̃'s pattern kept in the factor's order ([`Permuted`]) factors the matrices that faer's

@@ -650,7 +650,7 @@ impl<T: Scalar> SparseFactor<T> {
     /// factorization's (permuted) order: `rows[0] = j` holds the pivot d_j and the rest L's
     /// entries below it (L has a unit diagonal, not stored as such), at consecutive indices of the
     /// factor's values from `first`.
-    fn visit_ldlt_columns(&self, f: impl FnMut(usize, &[usize], usize)) {
+    pub(crate) fn visit_ldlt_columns(&self, f: impl FnMut(usize, &[usize], usize)) {
         assert_eq!(self.state, State::Ldlt);
         self.visit_columns(f);
     }
@@ -735,6 +735,26 @@ impl<T: Scalar> SparseFactor<T> {
     /// Hermitian ΔA, the bound is max_i γ_{2k_i+8}·(|L|(|D|(|Lᴴ|·1)))_i, the row sums enlarged for
     /// their own rounding: O(nnz(L)), no second factorization.
     pub fn ldlt_backward_error(&self) -> f64 {
+        let (rows_sum, row_count) = self.ldlt_product_row_sums();
+        let (u, k_max) = (
+            T::UNIT_ROUNDOFF,
+            row_count.iter().copied().max().unwrap_or(1),
+        );
+        // The row sums of moduli are computed with relative error below γ_{2k+4} (and the
+        // moduli within 4 units of the double rounding).
+        let sums = 1.0
+            + gamma_with(crate::linalg::roundoff::U, 2 * k_max + 4)
+            + 4.0 * crate::linalg::roundoff::U;
+        rows_sum
+            .iter()
+            .zip(&row_count)
+            .fold(0.0f64, |m, (&w, &k)| m.max(gamma_with(u, 2 * k + 8) * w))
+            * sums
+    }
+
+    /// The row sums (|L||D||Lᴴ|·1)_i of the last LDLᴴ and k_i, the entries of row i of L (its
+    /// unit diagonal included), both in the factorization's (permuted) order.
+    pub(crate) fn ldlt_product_row_sums(&self) -> (Vec<f64>, Vec<usize>) {
         let dim = self.dim();
         // (|Lᴴ|1)_j·|d_j| from column j alone, then column j's part of the rows of |L| times it:
         // one pass over the factor, the moduli of one column at a time.
@@ -750,20 +770,27 @@ impl<T: Scalar> SparseFactor<T> {
                 row_count[i] += 1;
             }
         });
-        let (u, k_max) = (
-            T::UNIT_ROUNDOFF,
-            row_count.iter().copied().max().unwrap_or(1),
-        );
-        // The row sums of moduli are computed with relative error below γ_{2k+4} (and the
-        // moduli within 4 units of the double rounding).
-        let sums = 1.0
-            + gamma_with(crate::linalg::roundoff::U, 2 * k_max + 4)
-            + 4.0 * crate::linalg::roundoff::U;
-        rows_sum
-            .iter()
-            .zip(&row_count)
-            .fold(0.0f64, |m, (&w, &k)| m.max(gamma_with(u, 2 * k + 8) * w))
-            * sums
+        (rows_sum, row_count)
+    }
+
+    /// The symbolic structure of the factor, for [`crate::linalg::residual`].
+    pub(crate) fn symbolic_raw(&self) -> &SymbolicCholeskyRaw<usize> {
+        self.symbolic.raw()
+    }
+
+    /// The values of the last LDLᴴ (as [`Self::visit_ldlt_columns`] reads them).
+    ///
+    /// # Panics
+    ///
+    /// Without a successful LDLᴴ before.
+    pub(crate) fn ldlt_values(&self) -> &[T] {
+        assert_eq!(self.state, State::Ldlt);
+        &self.values
+    }
+
+    /// `inverse[old] = new` of the fill-reducing order; `None` for the identity.
+    pub(crate) fn inverse_order(&self) -> Option<Vec<usize>> {
+        self.symbolic.perm().map(|p| p.arrays().1.to_vec())
     }
 
     /// Inertia of the last LDLᴴ: the numbers of negative and of non-positive pivots.

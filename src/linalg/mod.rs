@@ -17,6 +17,7 @@ pub mod eigen;
 pub mod factor;
 pub mod heap;
 pub mod parallel;
+pub mod residual;
 pub mod rng;
 pub mod roundoff;
 pub mod subspace;

@@ -297,8 +297,38 @@ impl Certifier3 {
             Ladder::Found {
                 theta, negative, ..
             } => Some((theta, negative)),
-            Ladder::Hidden { .. } | Ladder::Failed => None,
+            Ladder::Hidden { mu, .. } => self.measured_gap(lambda, scale, mu, assembly, k, n1),
+            Ladder::Failed => None,
         }
+    }
+
+    /// [`Self::gap`] at a shift where the ladder found at most k negative pivots but the
+    /// a-priori error bound hid the gap: the same LDLᴴ again, its error measured instead
+    /// ([`SparseFactor::ldlt_residual_bound`]), as the planar certificate does.
+    fn measured_gap(
+        &mut self,
+        lambda: &[[[f64; 3]; 3]],
+        scale: &[f64],
+        mu: f64,
+        assembly: f64,
+        k: usize,
+        n1: usize,
+    ) -> Option<(f64, usize)> {
+        let form = self.fill(lambda, scale, 0.0, mu, n1);
+        self.factorizations += 1;
+        self.factor.ldlt(self.assembly.matrix.as_ref()).ok()?;
+        let negative = self.factor.inertia_below(0.0);
+        if negative > k {
+            return None;
+        }
+        let measured = self
+            .factor
+            .ldlt_residual_bound(self.assembly.matrix.as_ref())?;
+        let theta = mu - measured - form - assembly;
+        (theta > 0.0).then(|| {
+            self.shifts.remember_shift(mu);
+            (theta, negative)
+        })
     }
 
     /// Takes the values of a factor that is no longer needed (the Newton descent's, in

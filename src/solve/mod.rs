@@ -708,10 +708,14 @@ fn hidden_gap_reason(h: &crate::certify::HiddenGap) -> String {
         ),
         None => "double-double did not resolve it either".to_string(),
     };
+    let measured = match h.measured {
+        Some(m) => format!(", its residual measured {m:.2e}"),
+        None => String::new(),
+    };
     format!(
         "SZEP unresolved: the second eigenvalue of W(lambda) is below the rounding of its \
          factorization (equilibrated, its LDL^H shows at most one negative pivot at the shift \
-         {:.2e}, but the error bound there is {:.2e}); {precise}",
+         {:.2e}, but the error bound there is {:.2e}{measured}); {precise}",
         h.shift, h.error
     )
 }
