@@ -1,5 +1,6 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
 use crate::linalg::factor::{Layout, Permuted, Scalar, SparseFactor, ldlt_error_floor};
+use crate::linalg::residual::Chunk;
 use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -23,11 +24,12 @@ use std::sync::Arc;
 /// equilibration (exact; B's diagonal lies in [1, 4)). A floating-point LLᴴ that succeeds is the
 /// exact factor of B + ΔB with ‖ΔB‖₂ of the order of dim·u·‖B‖₂ (Higham, Accuracy and Stability of
 /// Numerical Algorithms, §10.1: the backward error of Cholesky; u the unit roundoff). pgo takes
-/// α = dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B, summed exactly) plus the rounding of B's own diagonal, so
-/// success proves D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 under that backward-error model, i.e.
-/// W̃(λ) + ηP ⪰ 0. (The worst-case componentwise bound, γ_k times the fill, would be ~100x
-/// larger and the bound it gives too loose to certify at 1e-6; an a-posteriori residual in
-/// double-double would make the proof unconditional.)
+/// α = dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B, summed exactly) plus the rounding of B's own
+/// diagonal. That is a model (the worst-case componentwise bound, γ_k times the fill, would be
+/// ~100x larger and the bound it gives too loose to certify at 1e-6), so the LLᴴ that succeeds at
+/// the η returned is checked against it: its residual ΔB = L Lᴴ − B, measured
+/// ([`SparseFactor::llt_residual_bound`], some 50 units of rounding per entry), must lie within
+/// dim·u·‖B‖_∞. Then D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 is proven outright, i.e. W̃(λ) + ηP ⪰ 0.
 ///
 /// η is searched upward by factors of 2 from 1.25·η_res ([`SparseCertifier::resolution`]), the
 /// smallest value at which the estimate's own direction x (W̃(λ)x ≈ 0, x*(ηP)x = ηn) clears α in
@@ -75,6 +77,9 @@ pub struct SparseCertifier {
     last_enclosure: Option<(Vec<u64>, Enclosure)>,
     /// The last λ (bit for bit) of [`Self::estimate_row_sums`] and what it found.
     last_row_sums: std::sync::Mutex<Option<(Vec<u64>, RowSums)>>,
+    /// η (its bits) of the factor's LLᴴ where it is the last [`Self::try_eta`]'s success, and
+    /// the allowance dim·u·‖B‖_∞ that attempt gave its rounding ([`Self::measured_llt`]).
+    last_llt: Option<(u64, f64)>,
 }
 
 /// What the row sums of |B| give, B = D W̃(λ) D at the estimate's equilibration
@@ -178,6 +183,7 @@ impl SparseCertifier {
             last_gap: None,
             last_enclosure: None,
             last_row_sums: std::sync::Mutex::new(None),
+            last_llt: None,
             isolated: false,
             precise: None,
             hidden: None,
@@ -255,7 +261,29 @@ impl SparseCertifier {
         };
         // The largest η_j may round above eta_max: then the one below.
         let top = if eta(top) <= eta_max { top } else { top - 1 };
-        smallest_doubling(top, |j| self.try_eta(lambda, eta(j))).map(|j| proven(eta(j)))
+        self.last_llt = None;
+        let j = smallest_doubling(top, |j| self.try_eta(lambda, eta(j)))?;
+        self.measured_llt(lambda, eta(j)).then(|| proven(eta(j)))
+    }
+
+    /// Whether the LLᴴ that succeeded at η ([`Self::try_eta`], factored again unless it was
+    /// the last) holds without the backward-error model α rests on: its residual, measured
+    /// ([`SparseFactor::llt_residual_bound`], by the wide chunks, then if need be by the narrow
+    /// ones), within the model's allowance dim·u·‖B‖_∞. Then
+    /// L Lᴴ = B − αI + R with ‖R‖₂ at most that, so D(W̃(λ) + ηP)D ⪰ 0 is proven outright.
+    fn measured_llt(&mut self, lambda: &[f64], eta: f64) -> bool {
+        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits()) && !self.try_eta(lambda, eta) {
+            return false;
+        }
+        let Some((_, allowance)) = self.last_llt else {
+            return false;
+        };
+        let a = factored(&self.upper, &self.permuted, &self.values);
+        [Chunk::Wide, Chunk::Narrow].into_iter().any(|chunk| {
+            self.factor
+                .llt_residual_bound(a, chunk)
+                .is_some_and(|r| r <= allowance)
+        })
     }
 
     /// The deflated certificate of a rank-1 estimate x (p = 1), which sidesteps the resolution
@@ -524,7 +552,8 @@ impl SparseCertifier {
     /// a-priori error bound hid the gap: the same LDLᴴ again, its error measured instead
     /// ([`SparseFactor::ldlt_residual_bound`]: the residual of the stored factors, within some
     /// 50 units of rounding per entry where the a-priori bound counts 2k + 8, k up to thousands
-    /// in the top separators of 10⁶ poses and more: at 10⁶ 1.7e-13 against 3.3e-11).
+    /// in the top separators of 10⁶ poses and more: at 10⁶ 1.7e-13 against 3.3e-11; then, if
+    /// that falls short, within 4 units, [`Chunk::Narrow`]).
     /// `Err(measured)` where it did not prove the gap either (`None`: not measured).
     fn measured_gap(
         &mut self,
@@ -540,14 +569,17 @@ impl SparseCertifier {
             return Err(None);
         }
         let a = factored(&self.upper, &self.permuted, &self.values);
-        let measured = self.factor.ldlt_residual_bound(a).ok_or(None)? + form;
-        let theta = mu - measured - assembly;
-        if theta > 0.0 {
-            self.shifts.remember_shift(mu);
-            Ok(Gap::new(negative, theta))
-        } else {
-            Err(Some(measured))
+        let mut measured = None;
+        for chunk in [Chunk::Wide, Chunk::Narrow] {
+            let error = self.factor.ldlt_residual_bound(a, chunk).ok_or(None)? + form;
+            let theta = mu - error - assembly;
+            if theta > 0.0 {
+                self.shifts.remember_shift(mu);
+                return Ok(Gap::new(negative, theta));
+            }
+            measured = Some(error);
         }
+        Err(measured)
     }
 
     /// [`Self::gap`] at shift `mu` (and at most two shifts 8 and 64 times smaller while more than
@@ -735,7 +767,9 @@ impl SparseCertifier {
         });
         self.factorizations += 1;
         let a = factored(&self.upper, &self.permuted, &self.values);
-        self.factor.llt(a).is_ok()
+        let proven = self.factor.llt(a).is_ok();
+        self.last_llt = proven.then_some((eta.to_bits(), base));
+        proven
     }
 
     /// The eigenvalues of W̃(λ) at zero: the count a deflated proof established when `bound` is

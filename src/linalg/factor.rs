@@ -778,14 +778,31 @@ impl<T: Scalar> SparseFactor<T> {
         self.symbolic.raw()
     }
 
-    /// The values of the last LDLᴴ (as [`Self::visit_ldlt_columns`] reads them).
+    /// The values of the last LDLᴴ (`ldlt`) or LLᴴ (as [`Self::visit_ldlt_columns`] and
+    /// [`Self::visit_llt_columns`] read them).
     ///
     /// # Panics
     ///
-    /// Without a successful LDLᴴ before.
-    pub(crate) fn ldlt_values(&self) -> &[T] {
-        assert_eq!(self.state, State::Ldlt);
+    /// Without a successful factorization of that kind before.
+    pub(crate) fn factor_values(&self, ldlt: bool) -> &[T] {
+        assert_eq!(self.state, if ldlt { State::Ldlt } else { State::Llt });
         &self.values
+    }
+
+    /// The row sums (|L||Lᴴ|·1)_i of the last LLᴴ, in the factorization's (permuted) order:
+    /// column j adds |L_ij|·Σ_k |L_kj| to each of its rows i.
+    pub(crate) fn llt_product_row_sums(&self) -> Vec<f64> {
+        assert_eq!(self.state, State::Llt);
+        let mut rows_sum = vec![0.0; self.dim()];
+        let mut m = Vec::new();
+        self.visit_columns(|_, rows, first| {
+            T::moduli_into(&self.values[first..first + rows.len()], &mut m);
+            let column: f64 = m.iter().sum();
+            for (&i, &l) in rows.iter().zip(&m) {
+                rows_sum[i] += l * column;
+            }
+        });
+        rows_sum
     }
 
     /// `inverse[old] = new` of the fill-reducing order; `None` for the identity.

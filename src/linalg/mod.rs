@@ -1,5 +1,6 @@
 //! Numerical linear algebra, knowing nothing of pose graphs: sparse LLᴴ/LDLᴴ factorizations with
-//! their a-posteriori backward errors ([`factor`]), a block system with its factorization in
+//! their a-posteriori backward errors ([`factor`]) and an LDLᴴ's residual measured
+//! ([`residual`]), a block system with its factorization in
 //! 32-bit indices where they fit ([`block_system`]), the shift-invert subspace iteration for the
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
 //! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the

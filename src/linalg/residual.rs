@@ -11,8 +11,8 @@
 //! eigenvalue of A lies within ‖R‖₂ of one of L D Lᴴ's (Weyl).
 //!
 //! How: left-looking by panels (supernodes), as a supernodal Cholesky runs: the products L D Lᴴ
-//! of [`CHUNK`] columns at a time in double precision (faer's `matmul`), each within
-//! √2·γ_{2·CHUNK} of the moduli of its terms (Higham, *Accuracy and Stability of Numerical
+//! of a [`Chunk`] of 16 columns at a time in double precision (faer's `matmul`), each within
+//! √2·γ₃₂ of the moduli of its terms (Higham, *Accuracy and Stability of Numerical
 //! Algorithms*, §3.1 and Lemma 3.5: any order of summation, fused or not), summed with A's entries
 //! in double-double (Ogita, Rump and Oishi's Sum2: within u|s| + γ²_m·Σ|terms|). So the computed
 //! R̂ is within c·(|L||D||Lᴴ|)_ij of R, c ≈ 46u in ℂ, where the a-priori bound takes (2k + 8)u.
@@ -175,13 +175,37 @@ fn add<const COMPLEX: bool>(acc: &mut Accumulator, re: f64, im: f64) {
 }
 
 /// The columns of a panel the products take at a time: each entry of a product is a dot
-/// product of this many terms in double precision, within √2·γ_{2K} of its terms' moduli
-/// (Higham, §3.1 and Lemma 3.5: any order, fused or not), before its double-double sum.
-const CHUNK: usize = 16;
+/// product of this many terms K in double precision, within √2·γ_{2K} of its terms' moduli
+/// (Higham, §3.1 and Lemma 3.5: any order, fused or not), before its double-double sum. `Wide`,
+/// 16 (c ≈ 46u in ℂ), is the fast one (dense products of 16 columns: at 10⁶ poses 2.7 s
+/// against 1.1 s for the factorization); `Narrow`, 1, each term rounded alone (c ≈ 3.9u), for
+/// where the wide bound falls short (its scattered sums some 3x slower).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Chunk {
+    Wide,
+    Narrow,
+}
+
+impl Chunk {
+    fn columns(self) -> usize {
+        match self {
+            Chunk::Wide => 16,
+            Chunk::Narrow => 1,
+        }
+    }
+}
 
 /// The columns of a target panel whose residual is summed at a time (its double-double block:
 /// the panel's rows times this many, 32 bytes each).
 const BLOCK: usize = 128;
+
+/// The factorization a factor holds: LDLᴴ (L unit lower triangular, d_l stored on its diagonal)
+/// or LLᴴ (L's diagonal stored, D = I).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Ldlt,
+    Llt,
+}
 
 impl<T: Double> SparseFactor<T> {
     /// A bound on ‖L D Lᴴ − P A Pᵀ‖₂ for the last LDLᴴ (P its fill-reducing order), `a` the
@@ -191,26 +215,56 @@ impl<T: Double> SparseFactor<T> {
     ///
     /// Left-looking by panels (supernodes), as a supernodal Cholesky runs: each target panel's
     /// columns, a block at a time, gather the products L_t D_t L_tᴴ of every panel t whose rows
-    /// meet them (its own included), [`CHUNK`] of t's columns per dense product (faer's
+    /// meet them (its own included), a [`Chunk`] of t's columns per dense product (faer's
     /// `matmul`), each entry then added in double-double; less A's entries, then the moduli
     /// into the row sums.
-    pub fn ldlt_residual_bound(&self, a: SparseColMatRef<'_, usize, T>) -> Option<f64> {
-        let row_sums = self.residual_row_sums(a)?;
-        let (products, _) = self.ldlt_product_row_sums();
-        let c = chunk_allowance::<T>();
+    pub fn ldlt_residual_bound(
+        &self,
+        a: SparseColMatRef<'_, usize, T>,
+        chunk: Chunk,
+    ) -> Option<f64> {
+        let products = self.ldlt_product_row_sums().0;
+        self.residual_bound(a, Kind::Ldlt, &products, chunk)
+    }
+
+    /// As [`Self::ldlt_residual_bound`] for the last LLᴴ: a bound on ‖L Lᴴ − P A Pᵀ‖₂.
+    pub fn llt_residual_bound(
+        &self,
+        a: SparseColMatRef<'_, usize, T>,
+        chunk: Chunk,
+    ) -> Option<f64> {
+        let products = self.llt_product_row_sums();
+        self.residual_bound(a, Kind::Llt, &products, chunk)
+    }
+
+    /// The bound from the residual's row sums and `products`, (|L||D||Lᴴ|·1)_i.
+    fn residual_bound(
+        &self,
+        a: SparseColMatRef<'_, usize, T>,
+        kind: Kind,
+        products: &[f64],
+        chunk: Chunk,
+    ) -> Option<f64> {
+        let row_sums = self.residual_row_sums(a, kind, chunk)?;
+        let c = chunk_allowance::<T>(chunk);
         // Each row sum adds at most 2·dim moduli (|re| + |im| bounds the modulus from above, and
         // rounds below it by 2u² at most: roundoff::modulus_bound).
         let sums = 1.0 + gamma(2 * self.dim() + 8);
         let bound = row_sums
             .iter()
-            .zip(&products)
+            .zip(products)
             .fold(0.0f64, |m, (&r, &p)| m.max(r + 1.01 * c * p));
         Some(bound * sums * (1.0 + 8.0 * U))
     }
 
-    /// Σ_j |R̂_ij| (as |re| + |im|) for each row i of the computed residual R̂ of
-    /// [`Self::ldlt_residual_bound`], in the factor's order.
-    fn residual_row_sums(&self, a: SparseColMatRef<'_, usize, T>) -> Option<Vec<f64>> {
+    /// Σ_j |R̂_ij| (as |re| + |im|) for each row i of the computed residual R̂ of the last
+    /// factorization, of kind `kind` ([`Self::ldlt_residual_bound`]), in the factor's order.
+    fn residual_row_sums(
+        &self,
+        a: SparseColMatRef<'_, usize, T>,
+        kind: Kind,
+        chunk: Chunk,
+    ) -> Option<Vec<f64>> {
         let dim = self.dim();
         if dim >= 1 << 31 || a.compute_nnz() >= 1 << 32 {
             return None;
@@ -227,7 +281,9 @@ impl<T: Double> SparseFactor<T> {
             lower: &lower,
             panels: &panels,
             panel_of: &panel_of,
-            values: self.ldlt_values(),
+            values: self.factor_values(kind == Kind::Ldlt),
+            kind,
+            chunk: chunk.columns(),
         };
         // The blocks in two lanes, the second on the second core where it runs, each lane's
         // row sums apart and added at the end: the same bits on one core or two.
@@ -245,6 +301,8 @@ struct Sweep<'a, T> {
     panels: &'a Panels<'a>,
     panel_of: &'a [u32],
     values: &'a [T],
+    kind: Kind,
+    chunk: usize,
 }
 
 impl<T: Double> Sweep<'_, T> {
@@ -264,7 +322,7 @@ impl<T: Double> Sweep<'_, T> {
         let mut row_sums = vec![0.0f64; dim];
         let mut block: Vec<Accumulator> = Vec::new();
         let mut sources: Vec<(usize, usize, usize)> = Vec::new();
-        let mut work = Work::<T>::default();
+        let mut work = Work::<T>::new(self.kind, self.chunk);
         let mut count = 0usize;
         for s in 0..n {
             let target = panels.panel(s);
@@ -361,8 +419,8 @@ impl<T: Double> Sweep<'_, T> {
 /// c with each entry of the computed residual within c·(|L||D||Lᴴ|)_ij of the exact one: each
 /// chunk's dot product within √2·γ_{2K} (real: γ_K) of the moduli of its terms, whose factors
 /// d_l·L_il are rounded once more (u); their double-double sums add u² terms.
-fn chunk_allowance<T: Double>() -> f64 {
-    let k = if T::COMPLEX { 2 * CHUNK } else { CHUNK };
+fn chunk_allowance<T: Double>(chunk: Chunk) -> f64 {
+    let k = if T::COMPLEX { 2 } else { 1 } * chunk.columns();
     std::f64::consts::SQRT_2 * gamma(k) * (1.0 + U) + U
 }
 
@@ -376,8 +434,11 @@ struct Into<'a> {
     begin: usize,
 }
 
-/// The dense products' room, kept from one to the next.
+/// The dense products' room, kept from one to the next, for factors of one kind.
 struct Work<T> {
+    kind: Kind,
+    /// The columns per product ([`Chunk`]).
+    chunk: usize,
     /// d_l·L_il for the chunk's columns l, the rows reached.
     scaled: Mat<T>,
     /// L_jl for the block's columns j.
@@ -385,37 +446,49 @@ struct Work<T> {
     product: Mat<T>,
 }
 
-impl<T: Double> Default for Work<T> {
-    fn default() -> Self {
+impl<T: Double> Work<T> {
+    fn new(kind: Kind, chunk: usize) -> Self {
         Work {
+            kind,
+            chunk,
             scaled: Mat::new(),
             picked: Mat::new(),
             product: Mat::new(),
         }
     }
-}
 
-impl<T: Double> Work<T> {
-    /// A panel's own columns' products into its block of columns c1..c2: column l (unit
-    /// diagonal, d_l) meets the block's columns j ≥ l, its rows from l on.
+    /// d_l of column l stored at `diagonal`: the pivot of an LDLᴴ, 1 for an LLᴴ.
+    fn pivot(&self, values: &[T], diagonal: usize) -> f64 {
+        match self.kind {
+            Kind::Ldlt => values[diagonal].parts().0,
+            Kind::Llt => 1.0,
+        }
+    }
+
+    /// A panel's own columns' products into its block of columns c1..c2: column l meets the
+    /// block's columns j ≥ l, its rows from l on.
     fn own(&mut self, p: &Panel<'_>, values: &[T], c1: usize, c2: usize, into: Into<'_>) {
         let rows = p.rows();
-        for k0 in (0..c2).step_by(CHUNK) {
-            let k1 = (k0 + CHUNK).min(p.width());
-            // L's entry (q, l) of the panel (positions), as an explicit unit lower trapezoid.
+        let kind = self.kind;
+        for k0 in (0..c2).step_by(self.chunk) {
+            let k1 = (k0 + self.chunk).min(p.width());
+            // L's entry (q, l) of the panel (positions), as an explicit lower trapezoid (its
+            // diagonal 1 for an LDLᴴ).
             let entry = |q: usize, l: usize| {
                 if q < l {
                     T::zero_impl()
-                } else if q == l {
+                } else if q == l && kind == Kind::Ldlt {
                     T::one_impl()
                 } else {
                     values[p.first + l * rows + q]
                 }
             };
             let (top, j0) = (k0, c1.max(k0));
+            let pivots: Vec<f64> = (k0..k1)
+                .map(|l| self.pivot(values, p.first + l * rows + l))
+                .collect();
             fill(&mut self.scaled, rows - top, k1 - k0, |q, l| {
-                let d = values[p.first + (k0 + l) * rows + k0 + l].parts().0;
-                entry(top + q, k0 + l).times(d)
+                entry(top + q, k0 + l).times(pivots[l])
             });
             fill(&mut self.picked, c2 - j0, k1 - k0, |q, l| {
                 entry(j0 + q, k0 + l)
@@ -438,12 +511,13 @@ impl<T: Double> Work<T> {
     fn source(&mut self, p: &Panel<'_>, values: &[T], q1: usize, q2: usize, into: Into<'_>) {
         let (rows, width) = (p.rows(), p.width());
         let (top, picked) = (width + q1, q2 - q1);
-        for k0 in (0..width).step_by(CHUNK) {
-            let k1 = (k0 + CHUNK).min(width);
+        for k0 in (0..width).step_by(self.chunk) {
+            let k1 = (k0 + self.chunk).min(width);
+            let pivots: Vec<f64> = (k0..k1)
+                .map(|l| self.pivot(values, p.first + l * rows + l))
+                .collect();
             fill(&mut self.scaled, rows - top, k1 - k0, |q, l| {
-                let col = p.first + (k0 + l) * rows;
-                let d = values[col + k0 + l].parts().0;
-                values[col + top + q].times(d)
+                values[p.first + (k0 + l) * rows + top + q].times(pivots[l])
             });
             fill(&mut self.picked, picked, k1 - k0, |q, l| {
                 values[p.first + (k0 + l) * rows + top + q]
@@ -595,22 +669,34 @@ mod tests {
     }
 
     /// max_i Σ_j |(L D Lᴴ − P A Pᵀ)_ij| in double-double from the factor's columns as
-    /// [`SparseFactor::visit_ldlt_columns`] gives them and A's dense upper triangle, and the
-    /// largest row sum of |L||D||Lᴴ|.
-    fn dense_residual<T: Double>(f: &SparseFactor<T>, a: &SparseColMat<usize, T>) -> (f64, f64) {
+    /// [`SparseFactor::visit_ldlt_columns`] (`ldlt`) or [`SparseFactor::visit_llt_columns`]
+    /// (D = I) gives them and A's dense upper triangle, and the largest row sum of |L||D||Lᴴ|.
+    fn dense_residual<T: Double>(
+        f: &SparseFactor<T>,
+        a: &SparseColMat<usize, T>,
+        ldlt: bool,
+    ) -> (f64, f64) {
         let dim = f.dim();
         let dd = fx128::from_f64;
         // L's rows as (column, value) lists, D, and PAPᵀ dense.
         let mut rows: Vec<Vec<(usize, T)>> = vec![Vec::new(); dim];
-        let mut d = vec![0.0; dim];
-        let values = f.ldlt_values();
-        f.visit_ldlt_columns(|j, r, first| {
-            d[j] = values[first].parts().0;
-            rows[j].push((j, T::from_f64_impl(1.0)));
-            for (q, &i) in r.iter().enumerate().skip(1) {
-                rows[i].push((j, values[first + q]));
-            }
-        });
+        let mut d = vec![1.0; dim];
+        if ldlt {
+            let values = f.factor_values(true);
+            f.visit_ldlt_columns(|j, r, first| {
+                d[j] = values[first].parts().0;
+                rows[j].push((j, T::from_f64_impl(1.0)));
+                for (q, &i) in r.iter().enumerate().skip(1) {
+                    rows[i].push((j, values[first + q]));
+                }
+            });
+        } else {
+            f.visit_llt_columns(|j, r, values| {
+                for (&i, &v) in r.iter().zip(values) {
+                    rows[i].push((j, v));
+                }
+            });
+        }
         let order = f.order();
         let mut at = vec![0; dim];
         for (new, &old) in order.iter().enumerate() {
@@ -650,18 +736,28 @@ mod tests {
         (worst, product)
     }
 
-    fn factors<T: Double>(a: &SparseColMat<usize, T>, seed: u64) -> Vec<SparseFactor<T>> {
+    /// Factors of `a` to test, each with the chunk to measure it by: simplicial and supernodal
+    /// in a random order, AMD's and the identity's, both chunks on the supernodal ones.
+    fn factors<T: Double>(a: &SparseColMat<usize, T>, seed: u64) -> Vec<(SparseFactor<T>, Chunk)> {
         let dim = a.nrows();
         let mut rng = Rng::new(seed);
         let mut order: Vec<usize> = (0..dim).collect();
         for k in (1..dim).rev() {
             order.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
         }
+        let analyzed = || SparseFactor::analyze_ordered(a.symbolic(), &order, Layout::Supernodal);
         vec![
-            SparseFactor::analyze_ordered(a.symbolic(), &order, Layout::Simplicial),
-            SparseFactor::analyze_ordered(a.symbolic(), &order, Layout::Supernodal),
-            SparseFactor::analyze(a.symbolic()),
-            SparseFactor::analyze_in_order(a.symbolic(), Side::Upper, Layout::Supernodal),
+            (
+                SparseFactor::analyze_ordered(a.symbolic(), &order, Layout::Simplicial),
+                Chunk::Wide,
+            ),
+            (analyzed(), Chunk::Wide),
+            (analyzed(), Chunk::Narrow),
+            (SparseFactor::analyze(a.symbolic()), Chunk::Wide),
+            (
+                SparseFactor::analyze_in_order(a.symbolic(), Side::Upper, Layout::Supernodal),
+                Chunk::Narrow,
+            ),
         ]
     }
 
@@ -676,21 +772,48 @@ mod tests {
         let real = |rng: &mut Rng| 2.0 * rng.uniform() - 1.0;
         for seed in 1..4 {
             let a = indefinite(complex, 1.5, seed);
-            for mut f in factors(&a, seed) {
+            for (mut f, chunk) in factors(&a, seed) {
                 f.ldlt(a.as_ref()).expect("no zero pivot");
                 assert!(f.inertia_below(0.0) > 0, "indefinite");
-                let bound = f.ldlt_residual_bound(a.as_ref()).unwrap();
-                let (exact, product) = dense_residual(&f, &a);
+                let bound = f.ldlt_residual_bound(a.as_ref(), chunk).unwrap();
+                let (exact, product) = dense_residual(&f, &a, true);
                 assert!(bound >= exact, "{bound} < {exact}");
-                let allowance = 2.44 * chunk_allowance::<c64>() * product;
+                let allowance = 2.44 * chunk_allowance::<c64>(chunk) * product;
                 assert!(bound <= 1.42 * exact + allowance, "{bound} vs {exact}");
             }
             let a = indefinite(real, 1.5, seed);
-            for mut f in factors(&a, seed) {
+            for (mut f, chunk) in factors(&a, seed) {
                 f.ldlt(a.as_ref()).expect("no zero pivot");
-                let bound = f.ldlt_residual_bound(a.as_ref()).unwrap();
-                let (exact, product) = dense_residual(&f, &a);
-                let allowance = 2.44 * chunk_allowance::<f64>() * product;
+                let bound = f.ldlt_residual_bound(a.as_ref(), chunk).unwrap();
+                let (exact, product) = dense_residual(&f, &a, true);
+                let allowance = 2.44 * chunk_allowance::<f64>(chunk) * product;
+                assert!(bound >= exact && bound <= 1.42 * exact + allowance);
+            }
+        }
+    }
+
+    /// The LLᴴ's bound likewise, for positive definite matrices (the diagonal above its row's
+    /// sum): above the dense residual of L Lᴴ, within its allowance of it.
+    #[test]
+    fn the_llt_bound_holds_the_residual_of_the_stored_factor() {
+        let complex =
+            |rng: &mut Rng| c64::new(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0) * 0.7;
+        for seed in 1..3 {
+            let a = indefinite(complex, -0.5, seed);
+            for (mut f, chunk) in factors(&a, seed) {
+                f.llt(a.as_ref()).expect("positive definite");
+                let bound = f.llt_residual_bound(a.as_ref(), chunk).unwrap();
+                let (exact, product) = dense_residual(&f, &a, false);
+                assert!(exact > 0.0 && bound >= exact, "{bound} < {exact}");
+                let allowance = 2.44 * chunk_allowance::<c64>(chunk) * product;
+                assert!(bound <= 1.42 * exact + allowance, "{bound} vs {exact}");
+            }
+            let a = indefinite(|rng: &mut Rng| 2.0 * rng.uniform() - 1.0, -0.5, seed);
+            for (mut f, chunk) in factors(&a, seed) {
+                f.llt(a.as_ref()).expect("positive definite");
+                let bound = f.llt_residual_bound(a.as_ref(), chunk).unwrap();
+                let (exact, product) = dense_residual(&f, &a, false);
+                let allowance = 2.44 * chunk_allowance::<f64>(chunk) * product;
                 assert!(bound >= exact && bound <= 1.42 * exact + allowance);
             }
         }
@@ -730,11 +853,11 @@ mod tests {
                 }
             }
         }
-        for mut f in factors(&a, 7) {
+        for (mut f, chunk) in factors(&a, 7) {
             f.ldlt(a.as_ref()).unwrap();
-            let (exact, product) = dense_residual(&f, &a);
-            let own = exact + 1.01 * chunk_allowance::<c64>() * product;
-            let sums = f.residual_row_sums(b.as_ref()).unwrap();
+            let (exact, product) = dense_residual(&f, &a, true);
+            let own = exact + 1.01 * chunk_allowance::<c64>(chunk) * product;
+            let sums = f.residual_row_sums(b.as_ref(), Kind::Ldlt, chunk).unwrap();
             for (new, &old) in f.order().iter().enumerate() {
                 assert!(moved[old] > 1e-8);
                 assert!(

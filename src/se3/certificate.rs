@@ -35,6 +35,7 @@
 use super::problem::{Point3, Problem3};
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
+use crate::linalg::residual::Chunk;
 use crate::linalg::roundoff::{U, gamma};
 
 /// What [`Certifier3::certify`] proved.
@@ -75,6 +76,9 @@ pub struct Certifier3 {
     max_degree: usize,
     shifts: ShiftMemory,
     pub factorizations: usize,
+    /// η (its bits) of the factor's LLᵀ where it is the last [`Self::try_eta`]'s success, and
+    /// the allowance dim·u·‖B‖_∞ that attempt gave its rounding ([`Self::measured_llt`]).
+    last_llt: Option<(u64, f64)>,
 }
 
 impl Certifier3 {
@@ -148,6 +152,7 @@ impl Certifier3 {
             max_degree: problem.max_degree,
             shifts: ShiftMemory::default(),
             factorizations: 0,
+            last_llt: None,
         }
     }
 
@@ -321,14 +326,17 @@ impl Certifier3 {
         if negative > k {
             return None;
         }
-        let measured = self
-            .factor
-            .ldlt_residual_bound(self.assembly.matrix.as_ref())?;
-        let theta = mu - measured - form - assembly;
-        (theta > 0.0).then(|| {
-            self.shifts.remember_shift(mu);
-            (theta, negative)
-        })
+        for chunk in [Chunk::Wide, Chunk::Narrow] {
+            let measured = self
+                .factor
+                .ldlt_residual_bound(self.assembly.matrix.as_ref(), chunk)?;
+            let theta = mu - measured - form - assembly;
+            if theta > 0.0 {
+                self.shifts.remember_shift(mu);
+                return Some((theta, negative));
+            }
+        }
+        None
     }
 
     /// Takes the values of a factor that is no longer needed (the Newton descent's, in
@@ -400,6 +408,7 @@ impl Certifier3 {
         if !(eta_max.is_finite() && eta_max > 0.0) {
             return None;
         }
+        self.last_llt = None;
         let mut hi = eta_max;
         let mut proven = self.try_eta(problem, lambda, hi);
         if !proven {
@@ -434,11 +443,34 @@ impl Certifier3 {
                 }
             }
         }
+        if !self.measured_llt(problem, lambda, hi) {
+            return None;
+        }
         Some(Bound3 {
             eta: hi,
             lower_bound: dual_value(lambda, hi),
             gap: None,
             deflated: None,
+        })
+    }
+
+    /// Whether the LLᵀ that succeeded at η ([`Self::try_eta`], factored again unless it was the
+    /// last) holds without the backward-error model α rests on: its residual, measured
+    /// ([`SparseFactor::llt_residual_bound`]), within the model's allowance dim·u·‖B‖_∞, as in
+    /// the planar certificate ([`crate::certify::SparseCertifier`]).
+    fn measured_llt(&mut self, problem: &Problem3, lambda: &[[[f64; 3]; 3]], eta: f64) -> bool {
+        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
+            && !self.try_eta(problem, lambda, eta)
+        {
+            return false;
+        }
+        let Some((_, allowance)) = self.last_llt else {
+            return false;
+        };
+        [Chunk::Wide, Chunk::Narrow].into_iter().any(|chunk| {
+            self.factor
+                .llt_residual_bound(self.assembly.matrix.as_ref(), chunk)
+                .is_some_and(|r| r <= allowance)
         })
     }
 
@@ -453,7 +485,8 @@ impl Certifier3 {
             .abs_row_sums(lambda, &scale, eta, n1)
             .iter()
             .fold(0.0f64, |m, &v| m.max(v));
-        let alpha0 = dim as f64 * U * norm + self.assembly_error(&scale);
+        let model = dim as f64 * U * norm;
+        let alpha0 = model + self.assembly_error(&scale);
         let form = self.fill(lambda, &scale, eta, 0.0, n1);
         let alpha = (alpha0 + form) * (1.0 + 8.0 * U);
         // Subtract α on the diagonal.
@@ -464,7 +497,9 @@ impl Certifier3 {
         }
         self.assembly.fill(&self.values);
         self.factorizations += 1;
-        self.factor.llt(self.assembly.matrix.as_ref()).is_ok()
+        let proven = self.factor.llt(self.assembly.matrix.as_ref()).is_ok();
+        self.last_llt = proven.then_some((eta.to_bits(), model));
+        proven
     }
 
     /// The number of eigenvalues of S below `threshold` (inertia of S − threshold·I).
