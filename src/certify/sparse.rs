@@ -25,11 +25,12 @@ use std::sync::Arc;
 /// exact factor of B + ΔB with ‖ΔB‖₂ of the order of dim·u·‖B‖₂ (Higham, Accuracy and Stability of
 /// Numerical Algorithms, §10.1: the backward error of Cholesky; u the unit roundoff). pgo takes
 /// α = dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B, summed exactly) plus the rounding of B's own
-/// diagonal. That is a model (the worst-case componentwise bound, γ_k times the fill, would be
+/// diagonal and of W̃'s assembly. The first is a model (the worst-case componentwise bound, γ_k times the fill, would be
 /// ~100x larger and the bound it gives too loose to certify at 1e-6), so the LLᴴ that succeeds at
 /// the η returned is checked against it: its residual ΔB = L Lᴴ − B, measured
 /// ([`SparseFactor::llt_residual_bound`], some 50 units of rounding per entry), must lie within
-/// dim·u·‖B‖_∞. Then D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 is proven outright, i.e. W̃(λ) + ηP ⪰ 0.
+/// dim·u·‖B‖_∞ (α holds the assembly's rounding apart). Then D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 is
+/// proven outright, i.e. W̃(λ) + ηP ⪰ 0.
 ///
 /// η is searched upward by factors of 2 from 1.25·η_res ([`SparseCertifier::resolution`]), the
 /// smallest value at which the estimate's own direction x (W̃(λ)x ≈ 0, x*(ηP)x = ηn) clears α in
@@ -231,7 +232,7 @@ impl SparseCertifier {
         {
             return Some(bound);
         }
-        self.certify_cholesky(lambda, &x.x, x.p, eta_max)
+        self.certify_cholesky(problem, lambda, &x.x, x.p, eta_max)
     }
 
     /// Tries to prove W̃(λ) + ηP ⪰ 0 for η = 1.25·η_res·2^j ≤ `eta_max`, j < 80
@@ -241,6 +242,7 @@ impl SparseCertifier {
     /// per doubling (40 and more where the relaxation is not exact).
     pub fn certify_cholesky(
         &mut self,
+        problem: &Problem,
         lambda: &[f64],
         x: &[c64],
         p: usize,
@@ -262,28 +264,42 @@ impl SparseCertifier {
         // The largest η_j may round above eta_max: then the one below.
         let top = if eta(top) <= eta_max { top } else { top - 1 };
         self.last_llt = None;
-        let j = smallest_doubling(top, |j| self.try_eta(lambda, eta(j)))?;
-        self.measured_llt(lambda, eta(j)).then(|| proven(eta(j)))
+        let j = smallest_doubling(top, |j| self.try_eta(problem, lambda, eta(j), 0.0))?;
+        self.measured_llt(problem, lambda, eta(j))
+            .then(|| proven(eta(j)))
     }
 
     /// Whether the LLᴴ that succeeded at η ([`Self::try_eta`], factored again unless it was
     /// the last) holds without the backward-error model α rests on: its residual, measured
     /// ([`SparseFactor::llt_residual_bound`], by the wide chunks, then if need be by the narrow
-    /// ones), within the model's allowance dim·u·‖B‖_∞. Then
-    /// L Lᴴ = B − αI + R with ‖R‖₂ at most that, so D(W̃(λ) + ηP)D ⪰ 0 is proven outright.
-    fn measured_llt(&mut self, lambda: &[f64], eta: f64) -> bool {
-        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits()) && !self.try_eta(lambda, eta) {
+    /// ones), within the allowance α gave the factorization's rounding (the assembly's is apart).
+    /// Then L Lᴴ = B − αI + R with ‖R‖₂ at most that, so D(W̃(λ) + ηP)D ⪰ 0 is proven outright
+    /// for the exact W̃. Where the residual exceeds the allowance (small graphs, whose dim·u·‖B‖_∞
+    /// is a few units), once more with an allowance twice what it showed.
+    fn measured_llt(&mut self, problem: &Problem, lambda: &[f64], eta: f64) -> bool {
+        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
+            && !self.try_eta(problem, lambda, eta, 0.0)
+        {
             return false;
         }
-        let Some((_, allowance)) = self.last_llt else {
-            return false;
-        };
-        let a = factored(&self.upper, &self.permuted, &self.values);
-        [Chunk::Wide, Chunk::Narrow].into_iter().any(|chunk| {
-            self.factor
-                .llt_residual_bound(a, chunk)
-                .is_some_and(|r| r <= allowance)
-        })
+        let mut shown = f64::INFINITY;
+        for again in [false, true] {
+            if again && !(shown.is_finite() && self.try_eta(problem, lambda, eta, 2.0 * shown)) {
+                return false;
+            }
+            let Some((_, allowance)) = self.last_llt else {
+                return false;
+            };
+            let a = factored(&self.upper, &self.permuted, &self.values);
+            for chunk in [Chunk::Wide, Chunk::Narrow] {
+                match self.factor.llt_residual_bound(a, chunk) {
+                    Some(r) if r <= allowance => return true,
+                    Some(r) => shown = shown.min(r),
+                    None => return false,
+                }
+            }
+        }
+        false
     }
 
     /// The deflated certificate of a rank-1 estimate x (p = 1), which sidesteps the resolution
@@ -742,20 +758,23 @@ impl SparseCertifier {
         rows
     }
 
-    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Whether it succeeded.
-    fn try_eta(&mut self, lambda: &[f64], eta: f64) -> bool {
+    /// One attempt: B = D(W̃(λ) + ηP)D − αI, LLᴴ. Whether it succeeded. α allows for the
+    /// factorization's rounding (dim·u·‖B‖_∞, or `rounding` where that is larger: what
+    /// [`Self::measured_llt`] checks), the assembly's and that of B's own diagonal.
+    fn try_eta(&mut self, problem: &Problem, lambda: &[f64], eta: f64, rounding: f64) -> bool {
         let dim = self.dim();
         let rot0 = dim - lambda.len();
         let Some((a, scale)) = self.scaling(lambda, eta, false) else {
             return false;
         };
-        let base = self.alpha(&a, &scale);
-        let mut alpha = base;
+        let base = self.alpha(&a, &scale).max(rounding);
+        let floor = base + assembly_error(problem, &scale);
+        let mut alpha = floor;
         // Plus the rounding of each a_kk itself (two additions), in equilibrated units.
         for k in rot0..dim {
             let w = self.upper.val()[self.diagonal(k)].re;
             let magnitude = w + lambda[k - rot0].abs() + eta;
-            alpha = alpha.max(base + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
+            alpha = alpha.max(floor + 4.0 * f64::EPSILON * magnitude * scale[k] * scale[k]);
         }
         self.write(|r, c, v| {
             let s = scale[r] * scale[c];
@@ -1350,7 +1369,7 @@ mod tests {
                 );
             }
             let bound = |c: &mut SparseCertifier| {
-                c.certify_cholesky(&lambda, &x, 1, 1e3)
+                c.certify_cholesky(problem, &lambda, &x, 1, 1e3)
                     .map(|b| (b.eta.to_bits(), b.lower_bound.to_bits()))
             };
             let proven = bound(&mut kept);

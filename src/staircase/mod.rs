@@ -1034,7 +1034,7 @@ fn solve_from_start(
         && certifier.hidden_gap().is_some()
         && !certifier.cholesky_within_reach(&local.lambda, &local.point.x, 1);
     if first.is_none() && !hopeless {
-        first = certifier.certify_cholesky(&local.lambda, &local.point.x, 1, reach_1);
+        first = certifier.certify_cholesky(problem, &local.lambda, &local.point.x, 1, reach_1);
     }
     if first.is_some() || hopeless {
         return Some(finish(
