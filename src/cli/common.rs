@@ -182,7 +182,28 @@ pub fn write_stdout(bytes: &[u8]) -> crate::Result<()> {
 
 /// Formats a float for the human-readable reports: shortest round-trip form.
 pub fn num(v: f64) -> String {
+    // `format_f64` takes finite values only (zmij printed ∞ as 1.797693134862316e+308).
+    if !v.is_finite() {
+        return v.to_string();
+    }
     let mut out = Vec::new();
     io::format_f64(v, &mut out);
     String::from_utf8(out).expect("ASCII")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    /// The reports' numbers: the shortest round trip for finite values, and what they are for
+    /// the others (an overflowing gradient norm was printed as f64::MAX's digits).
+    #[test]
+    fn a_report_number_is_the_value_it_stands_for() {
+        assert_eq!(num(1.5), "1.5");
+        assert_eq!(num(-0.0), "-0");
+        assert_eq!(num(1e-7), "1e-7");
+        assert_eq!(num(f64::INFINITY), "inf");
+        assert_eq!(num(f64::NEG_INFINITY), "-inf");
+        assert_eq!(num(f64::NAN), "NaN");
+    }
 }

@@ -277,8 +277,9 @@ impl Ipm {
             llt_factor::cholesky_in_place_scratch::<c64>(n, Par::Seq, Default::default()),
             llt_factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default()),
             llt_solve::solve_in_place_scratch::<f64>(n, 1, Par::Seq),
+            // At least 1: faer 0.24 sizes its Householder scratch by n − 1.
             evd::self_adjoint_evd_scratch::<c64>(
-                n,
+                n.max(1),
                 ComputeEigenvectors::Yes,
                 Par::Seq,
                 Default::default(),

@@ -1056,10 +1056,14 @@ impl SlotIter<'_> {
 }
 
 impl<T: Scalar> Assembly<T> {
-    /// The pattern of entries (row, col) with row ≤ col, in the order [`Assembly::fill`] will
-    /// receive their values (duplicates allowed: they add up).
+    /// The pattern of entries (row, col) of one triangle, row ≤ col (upper) or row ≥ col
+    /// (lower, as the supernodal factors read it: [`Layout::stored_side`]), in the order
+    /// [`Assembly::fill`] will receive their values (duplicates allowed: they add up).
     pub fn new(dim: usize, entries: &[(usize, usize)]) -> Self {
-        debug_assert!(entries.iter().all(|&(r, c)| r <= c));
+        debug_assert!(
+            entries.iter().all(|&(r, c)| r <= c) || entries.iter().all(|&(r, c)| r >= c),
+            "entries of both triangles"
+        );
         Self::from_entries(dim, entries.to_vec())
     }
 
