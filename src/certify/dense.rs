@@ -20,8 +20,12 @@
 //! That t is often pessimistic (‖S̃‖²/λ_min(L)² is large for long chains), so smaller shifts
 //! s are tried directly on the equilibrated matrix D W̃(λ − s1) D (D = diag(W̃_kk^(−1/2)), PSD
 //! exactly when W̃(λ − s1) is): if its computed smallest eigenvalue is at least its own rounding
-//! allowance, W̃(λ − s1) ⪰ 0 outright and the bound Σλ − n·s holds. The better of the two proven
-//! bounds is reported.
+//! allowance, W̃(λ − s1) ⪰ 0 and the bound Σλ − n·s holds. The better of the two bounds is
+//! reported.
+//!
+//! Both rest on the eigensolver's backward error taken as c·d·u·‖W̃(λ)‖_F, a model rather than a
+//! theorem with these constants: [`crate::dual::algorithm1`] proves the shift found here again,
+//! by a factorization whose residual is measured ([`crate::certify::SparseCertifier::prove_shift`]).
 
 use crate::linalg::eigen::{hermitian_eigen, hermitian_eigenvalues};
 use crate::problem::matrix::PoseGraphMatrix;

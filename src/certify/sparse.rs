@@ -269,6 +269,15 @@ impl SparseCertifier {
             .then(|| proven(eta(j)))
     }
 
+    /// The lower bound Σλ − n·η (less its rounding) where W̃(λ) + ηP ⪰ 0 is proven at this one
+    /// η by the shifted LLᴴ with its residual measured ([`Self::measured_llt`]): for a shift
+    /// found otherwise (the dense certificate's, from eigenvalues: [`crate::certify::dense`]).
+    pub fn prove_shift(&mut self, problem: &Problem, lambda: &[f64], eta: f64) -> Option<f64> {
+        self.last_llt = None;
+        (self.try_eta(problem, lambda, eta, 0.0) && self.measured_llt(problem, lambda, eta))
+            .then(|| dual_value(lambda, eta))
+    }
+
     /// Whether the LLᴴ that succeeded at η ([`Self::try_eta`], factored again unless it was
     /// the last) holds without the backward-error model α rests on: its residual, measured
     /// ([`SparseFactor::llt_residual_bound`], by the wide chunks, then if need be by the narrow
@@ -1187,6 +1196,42 @@ mod tests {
             x[problem.rotation_row(k)] = c64::new(pose.theta.cos(), pose.theta.sin());
         }
         Point { p: 1, x }
+    }
+
+    /// A shift proven by [`SparseCertifier::prove_shift`] (the dense certificate's check) is one
+    /// that makes W̃(λ − η1) = W̃(λ) + ηP PSD: at a noiseless graph's ground truth W̃(λ) has its
+    /// one zero eigenvalue along x, whose rotations are nonzero, so η > 0 (a tenth of the mean
+    /// rotation diagonal) lifts it and is proven, with the bound Σλ − nη less its rounding, while
+    /// η < 0 (the same, negated) takes x*W̃x below zero and must be refused, as must a smaller
+    /// negative one, 1e-9 of it.
+    #[test]
+    fn a_proven_shift_is_one_that_makes_the_matrix_psd() {
+        let sim = simulate(&SimulationConfig {
+            n: 60,
+            seed: 9,
+            loop_probability: 0.1,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
+            ..Default::default()
+        });
+        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
+        let problem = &Problem::new(&sim.graph, &w);
+        let point = truth_point(problem, &sim.truth);
+        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+        let mut certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
+        let dim = certifier.dim();
+        let rot0 = dim - lambda.len();
+        let eta = 0.1
+            * (rot0..dim)
+                .map(|k| problem.matrix.upper.val()[certifier.diagonal(k)].re)
+                .sum::<f64>()
+            / lambda.len() as f64;
+        let n = lambda.len() as f64;
+        let lower = certifier.prove_shift(problem, &lambda, eta).expect("PSD");
+        let exact = lambda.iter().sum::<f64>() - n * eta;
+        assert!(lower <= exact && lower >= exact - 1e-9 * exact.abs().max(1.0));
+        assert_eq!(certifier.prove_shift(problem, &lambda, -eta), None);
+        assert_eq!(certifier.prove_shift(problem, &lambda, -1e-9 * eta), None);
     }
 
     /// The double-double gap ([`SparseCertifier::precise_gap`]), which no public file reaches (it
