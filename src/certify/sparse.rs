@@ -1,6 +1,6 @@
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
 use crate::linalg::factor::{Layout, Permuted, Scalar, SparseFactor, ldlt_error_floor};
-use crate::linalg::residual::Chunk;
+use crate::linalg::residual::{Chunk, within_allowance};
 use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -284,31 +284,29 @@ impl SparseCertifier {
     /// ones), within the allowance α gave the factorization's rounding (the assembly's is apart).
     /// Then L Lᴴ = B − αI + R with ‖R‖₂ at most that, so D(W̃(λ) + ηP)D ⪰ 0 is proven outright
     /// for the exact W̃. Where the residual exceeds the allowance (small graphs, whose dim·u·‖B‖_∞
-    /// is a few units), once more with an allowance twice what it showed.
+    /// is a few units), once more with an allowance twice what it showed ([`within_allowance`]).
     fn measured_llt(&mut self, problem: &Problem, lambda: &[f64], eta: f64) -> bool {
         if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
             && !self.try_eta(problem, lambda, eta, 0.0)
         {
             return false;
         }
-        let mut shown = f64::INFINITY;
-        for again in [false, true] {
-            if again && !(shown.is_finite() && self.try_eta(problem, lambda, eta, 2.0 * shown)) {
-                return false;
-            }
-            let Some((_, allowance)) = self.last_llt else {
-                return false;
-            };
-            let a = factored(&self.upper, &self.permuted, &self.values);
-            for chunk in [Chunk::Wide, Chunk::Narrow] {
-                match self.factor.llt_residual_bound(a, chunk) {
-                    Some(r) if r <= allowance => return true,
-                    Some(r) => shown = shown.min(r),
-                    None => return false,
-                }
-            }
-        }
-        false
+        let Some((_, allowance)) = self.last_llt else {
+            return false;
+        };
+        within_allowance(
+            self,
+            allowance,
+            |c, chunk| {
+                let a = factored(&c.upper, &c.permuted, &c.values);
+                c.factor.llt_residual_bound(a, chunk)
+            },
+            |c, rounding| {
+                c.try_eta(problem, lambda, eta, rounding)
+                    .then(|| c.last_llt.map(|(_, a)| a))
+                    .flatten()
+            },
+        )
     }
 
     /// The deflated certificate of a rank-1 estimate x (p = 1), which sidesteps the resolution
@@ -1198,6 +1196,35 @@ mod tests {
         Point { p: 1, x }
     }
 
+    /// A generated graph without noise (`n` poses, `seed`, loop closures with probability
+    /// `loops`) at its ground truth, where f = 0: the problem, the point, its multipliers λ, the
+    /// certifier of W̃ and the mean of W̃'s diagonal over the rotation rows.
+    fn noiseless_truth(
+        n: usize,
+        seed: u64,
+        loops: f64,
+    ) -> (Problem, Point, Vec<f64>, SparseCertifier, f64) {
+        let sim = simulate(&SimulationConfig {
+            n,
+            seed,
+            loop_probability: loops,
+            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
+            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
+            ..Default::default()
+        });
+        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
+        let problem = Problem::new(&sim.graph, &w);
+        let point = truth_point(&problem, &sim.truth);
+        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+        let certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
+        let (dim, rot0) = (certifier.dim(), certifier.dim() - lambda.len());
+        let mean = (rot0..dim)
+            .map(|k| problem.matrix.upper.val()[certifier.diagonal(k)].re)
+            .sum::<f64>()
+            / lambda.len() as f64;
+        (problem, point, lambda, certifier, mean)
+    }
+
     /// A shift proven by [`SparseCertifier::prove_shift`] (the dense certificate's check) is one
     /// that makes W̃(λ − η1) = W̃(λ) + ηP PSD: at a noiseless graph's ground truth W̃(λ) has its
     /// one zero eigenvalue along x, whose rotations are nonzero, so η > 0 (a tenth of the mean
@@ -1206,26 +1233,8 @@ mod tests {
     /// negative one, 1e-9 of it.
     #[test]
     fn a_proven_shift_is_one_that_makes_the_matrix_psd() {
-        let sim = simulate(&SimulationConfig {
-            n: 60,
-            seed: 9,
-            loop_probability: 0.1,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
-            ..Default::default()
-        });
-        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
-        let problem = &Problem::new(&sim.graph, &w);
-        let point = truth_point(problem, &sim.truth);
-        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
-        let mut certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
-        let dim = certifier.dim();
-        let rot0 = dim - lambda.len();
-        let eta = 0.1
-            * (rot0..dim)
-                .map(|k| problem.matrix.upper.val()[certifier.diagonal(k)].re)
-                .sum::<f64>()
-            / lambda.len() as f64;
+        let (problem, _, lambda, mut certifier, mean) = noiseless_truth(60, 9, 0.1);
+        let (problem, eta) = (&problem, 0.1 * mean);
         let n = lambda.len() as f64;
         let lower = certifier.prove_shift(problem, &lambda, eta).expect("PSD");
         let exact = lambda.iter().sum::<f64>() - n * eta;
@@ -1247,32 +1256,16 @@ mod tests {
     /// below μ and nothing where more do.
     #[test]
     fn the_double_double_gap_follows_the_dense_eigenvalues() {
-        let sim = simulate(&SimulationConfig {
-            n: 30,
-            seed: 5,
-            loop_probability: 0.2,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
-            ..Default::default()
-        });
-        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
-        let problem = &Problem::new(&sim.graph, &w);
-        let point = truth_point(problem, &sim.truth);
+        let (problem, point, lambda, mut certifier, mean) = noiseless_truth(30, 5, 0.2);
+        let problem = &problem;
         let weight: f64 = problem.terms.iter().map(|t| t.tau + t.kappa).sum();
         assert!(
             problem.cost(&point) < 1e-20 * weight,
             "the truth is not a zero of f"
         );
-        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
-        let mut certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
-        let dim = certifier.dim();
-        let rot0 = dim - lambda.len();
+        let (dim, rot0) = (certifier.dim(), certifier.dim() - lambda.len());
         // δ a twentieth of the rotation rows' mean diagonal entry of W̃.
-        let delta = 0.05
-            * (rot0..dim)
-                .map(|k| problem.matrix.upper.val()[certifier.diagonal(k)].re)
-                .sum::<f64>()
-            / lambda.len() as f64;
+        let delta = 0.05 * mean;
         let lowered: Vec<f64> = lambda.iter().map(|l| l - delta).collect();
         let mut proven = [0; 2];
         let mut measured = [0; 2];

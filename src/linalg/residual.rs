@@ -292,6 +292,41 @@ impl<T: Double> SparseFactor<T> {
     }
 }
 
+/// Whether a shifted LLᴴ's claim holds by its measured residual, for the certificates' fallback
+/// (`certify_cholesky`, planar and 3D): `measure(state, chunk)` bounds the residual of the LLᴴ
+/// at hand ([`SparseFactor::llt_residual_bound`]), `allowance` is what its shift α gave the
+/// factorization's rounding. By the wide chunks, then the narrow; where the residual shown
+/// exceeds the allowance, `again(state, rounding)` factors once more with that much allowed
+/// (twice the residual shown; the new allowance, or `None` where that LLᴴ fails), measured again.
+pub fn within_allowance<S>(
+    state: &mut S,
+    allowance: f64,
+    measure: impl Fn(&S, Chunk) -> Option<f64>,
+    mut again: impl FnMut(&mut S, f64) -> Option<f64>,
+) -> bool {
+    let (mut allowance, mut shown) = (allowance, f64::INFINITY);
+    for retry in [false, true] {
+        if retry {
+            match shown
+                .is_finite()
+                .then(|| again(state, 2.0 * shown))
+                .flatten()
+            {
+                Some(a) => allowance = a,
+                None => return false,
+            }
+        }
+        for chunk in [Chunk::Wide, Chunk::Narrow] {
+            match measure(state, chunk) {
+                Some(r) if r <= allowance => return true,
+                Some(r) => shown = shown.min(r),
+                None => return false,
+            }
+        }
+    }
+    false
+}
+
 /// What the lanes of [`SparseFactor::residual_row_sums`] share: A (one triangle, `lower` its
 /// lower triangle in the factor's order), the factor's panels, the panel of each column and the
 /// factor's values.
@@ -364,14 +399,14 @@ impl<T: Double> Sweep<'_, T> {
                 let c2 = (c1 + BLOCK).min(target.width());
                 block.clear();
                 block.resize(rows * (c2 - c1), [0.0; 4]);
-                let into = Into {
+                let mut into = Into {
                     block: &mut block,
                     position: &position,
                     rows,
                     c1,
                     begin: target.begin,
                 };
-                work.own(&target, values, c1, c2, into);
+                work.own(&target, values, c1, c2, &mut into);
                 for &(t, p1, p2) in &sources {
                     let source = panels.panel(t);
                     // Its rows in the block's columns, then all its rows below them.
@@ -379,14 +414,7 @@ impl<T: Double> Sweep<'_, T> {
                     let q1 = p1 + below.partition_point(|&r| r < target.begin + c1);
                     let q2 = p1 + below.partition_point(|&r| r < target.begin + c2);
                     if q1 < q2 {
-                        let into = Into {
-                            block: &mut block,
-                            position: &position,
-                            rows,
-                            c1,
-                            begin: target.begin,
-                        };
-                        work.source(&source, values, q1, q2, into);
+                        work.source(&source, values, q1, q2, &mut into);
                     }
                 }
                 // − A, then the moduli into the row sums (each entry below the diagonal into its
@@ -467,7 +495,7 @@ impl<T: Double> Work<T> {
 
     /// A panel's own columns' products into its block of columns c1..c2: column l meets the
     /// block's columns j ≥ l, its rows from l on.
-    fn own(&mut self, p: &Panel<'_>, values: &[T], c1: usize, c2: usize, into: Into<'_>) {
+    fn own(&mut self, p: &Panel<'_>, values: &[T], c1: usize, c2: usize, into: &mut Into<'_>) {
         let rows = p.rows();
         let kind = self.kind;
         for k0 in (0..c2).step_by(self.chunk) {
@@ -508,7 +536,7 @@ impl<T: Double> Work<T> {
 
     /// A source panel's products into the target's block: its rows at positions q1..q2 of
     /// `below` are the block's columns, its rows from q1 on the block's rows.
-    fn source(&mut self, p: &Panel<'_>, values: &[T], q1: usize, q2: usize, into: Into<'_>) {
+    fn source(&mut self, p: &Panel<'_>, values: &[T], q1: usize, q2: usize, into: &mut Into<'_>) {
         let (rows, width) = (p.rows(), p.width());
         let (top, picked) = (width + q1, q2 - q1);
         for k0 in (0..width).step_by(self.chunk) {
@@ -761,61 +789,41 @@ mod tests {
         ]
     }
 
-    /// The bound holds the dense residual (in double-double) from above and exceeds it by no
-    /// more than its own allowance: √2 for |re| + |im|, and c·|L||D||Lᴴ| both for the computed
-    /// residual's rounding and for the bound's allowance of it, for real and complex
-    /// matrices, simplicial and supernodal factors, in a random order, AMD's and the identity.
+    /// Each of [`factors`] of `a`, by LDLᴴ (`ldlt`, `a` indefinite) or LLᴴ: the bound holds
+    /// the dense residual (in double-double) from above and exceeds it by no more than its own
+    /// allowance: √2 for |re| + |im|, and c·|L||D||Lᴴ| both for the computed residual's rounding
+    /// and for the bound's allowance of it.
+    fn bound_holds_the_residual<T: Double>(a: &SparseColMat<usize, T>, seed: u64, ldlt: bool) {
+        for (mut f, chunk) in factors(a, seed) {
+            let bound = if ldlt {
+                f.ldlt(a.as_ref()).expect("no zero pivot");
+                assert!(f.inertia_below(0.0) > 0, "indefinite");
+                f.ldlt_residual_bound(a.as_ref(), chunk).unwrap()
+            } else {
+                f.llt(a.as_ref()).expect("positive definite");
+                f.llt_residual_bound(a.as_ref(), chunk).unwrap()
+            };
+            let (exact, product) = dense_residual(&f, a, ldlt);
+            assert!(exact > 0.0 && bound >= exact, "{bound} < {exact}");
+            let allowance = 2.44 * chunk_allowance::<T>(chunk) * product;
+            assert!(bound <= 1.42 * exact + allowance, "{bound} vs {exact}");
+        }
+    }
+
+    /// [`bound_holds_the_residual`] for real and complex matrices: LDLᴴ of indefinite ones (a
+    /// shift of 1.5 puts a share of the pivots below zero), LLᴴ of positive definite ones (the
+    /// diagonal above its row's sum), simplicial and supernodal factors, in a random order,
+    /// AMD's and the identity.
     #[test]
     fn the_bound_holds_the_residual_of_the_stored_factors() {
         let complex =
             |rng: &mut Rng| c64::new(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0) * 0.7;
         let real = |rng: &mut Rng| 2.0 * rng.uniform() - 1.0;
         for seed in 1..4 {
-            let a = indefinite(complex, 1.5, seed);
-            for (mut f, chunk) in factors(&a, seed) {
-                f.ldlt(a.as_ref()).expect("no zero pivot");
-                assert!(f.inertia_below(0.0) > 0, "indefinite");
-                let bound = f.ldlt_residual_bound(a.as_ref(), chunk).unwrap();
-                let (exact, product) = dense_residual(&f, &a, true);
-                assert!(bound >= exact, "{bound} < {exact}");
-                let allowance = 2.44 * chunk_allowance::<c64>(chunk) * product;
-                assert!(bound <= 1.42 * exact + allowance, "{bound} vs {exact}");
-            }
-            let a = indefinite(real, 1.5, seed);
-            for (mut f, chunk) in factors(&a, seed) {
-                f.ldlt(a.as_ref()).expect("no zero pivot");
-                let bound = f.ldlt_residual_bound(a.as_ref(), chunk).unwrap();
-                let (exact, product) = dense_residual(&f, &a, true);
-                let allowance = 2.44 * chunk_allowance::<f64>(chunk) * product;
-                assert!(bound >= exact && bound <= 1.42 * exact + allowance);
-            }
-        }
-    }
-
-    /// The LLᴴ's bound likewise, for positive definite matrices (the diagonal above its row's
-    /// sum): above the dense residual of L Lᴴ, within its allowance of it.
-    #[test]
-    fn the_llt_bound_holds_the_residual_of_the_stored_factor() {
-        let complex =
-            |rng: &mut Rng| c64::new(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0) * 0.7;
-        for seed in 1..3 {
-            let a = indefinite(complex, -0.5, seed);
-            for (mut f, chunk) in factors(&a, seed) {
-                f.llt(a.as_ref()).expect("positive definite");
-                let bound = f.llt_residual_bound(a.as_ref(), chunk).unwrap();
-                let (exact, product) = dense_residual(&f, &a, false);
-                assert!(exact > 0.0 && bound >= exact, "{bound} < {exact}");
-                let allowance = 2.44 * chunk_allowance::<c64>(chunk) * product;
-                assert!(bound <= 1.42 * exact + allowance, "{bound} vs {exact}");
-            }
-            let a = indefinite(|rng: &mut Rng| 2.0 * rng.uniform() - 1.0, -0.5, seed);
-            for (mut f, chunk) in factors(&a, seed) {
-                f.llt(a.as_ref()).expect("positive definite");
-                let bound = f.llt_residual_bound(a.as_ref(), chunk).unwrap();
-                let (exact, product) = dense_residual(&f, &a, false);
-                let allowance = 2.44 * chunk_allowance::<f64>(chunk) * product;
-                assert!(bound >= exact && bound <= 1.42 * exact + allowance);
-            }
+            bound_holds_the_residual(&indefinite(complex, 1.5, seed), seed, true);
+            bound_holds_the_residual(&indefinite(real, 1.5, seed), seed, true);
+            bound_holds_the_residual(&indefinite(complex, -0.5, seed), seed, false);
+            bound_holds_the_residual(&indefinite(real, -0.5, seed), seed, false);
         }
     }
 
@@ -823,7 +831,8 @@ mod tests {
     /// random ε of modulus up to 1e-8 (off the diagonal complex, so half of them conjugated
     /// where the order puts them), each row sum of the residual is that of E (as |re| + |im|,
     /// E = (A + E) − A exact in doubles) to within the residual of A itself (dense, in
-    /// double-double) and the rounding allowance: each entry lands at its row and column, conjugated where it should be.
+    /// double-double) and the rounding allowance: each entry lands at its row and column,
+    /// conjugated where it should be.
     #[test]
     fn the_residual_against_a_perturbed_matrix_measures_the_perturbation() {
         let draw =

@@ -35,7 +35,7 @@
 use super::problem::{Point3, Problem3};
 use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
-use crate::linalg::residual::Chunk;
+use crate::linalg::residual::{Chunk, within_allowance};
 use crate::linalg::roundoff::{U, gamma};
 
 /// What [`Certifier3::certify`] proved.
@@ -457,34 +457,30 @@ impl Certifier3 {
     /// Whether the LLᵀ that succeeded at η ([`Self::try_eta`], factored again unless it was the
     /// last) holds without the backward-error model α rests on: its residual, measured
     /// ([`SparseFactor::llt_residual_bound`]), within the allowance α gave the factorization's
-    /// rounding, else once more with twice what it showed, as in the planar certificate
-    /// ([`crate::certify::SparseCertifier`]).
+    /// rounding, else once more with twice what it showed ([`within_allowance`]), as in the
+    /// planar certificate ([`crate::certify::SparseCertifier`]).
     fn measured_llt(&mut self, problem: &Problem3, lambda: &[[[f64; 3]; 3]], eta: f64) -> bool {
         if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
             && !self.try_eta(problem, lambda, eta, 0.0)
         {
             return false;
         }
-        let mut shown = f64::INFINITY;
-        for again in [false, true] {
-            if again && !(shown.is_finite() && self.try_eta(problem, lambda, eta, 2.0 * shown)) {
-                return false;
-            }
-            let Some((_, allowance)) = self.last_llt else {
-                return false;
-            };
-            for chunk in [Chunk::Wide, Chunk::Narrow] {
-                match self
-                    .factor
-                    .llt_residual_bound(self.assembly.matrix.as_ref(), chunk)
-                {
-                    Some(r) if r <= allowance => return true,
-                    Some(r) => shown = shown.min(r),
-                    None => return false,
-                }
-            }
-        }
-        false
+        let Some((_, allowance)) = self.last_llt else {
+            return false;
+        };
+        within_allowance(
+            self,
+            allowance,
+            |c, chunk| {
+                c.factor
+                    .llt_residual_bound(c.assembly.matrix.as_ref(), chunk)
+            },
+            |c, rounding| {
+                c.try_eta(problem, lambda, eta, rounding)
+                    .then(|| c.last_llt.map(|(_, a)| a))
+                    .flatten()
+            },
+        )
     }
 
     fn try_eta(
