@@ -25,7 +25,8 @@
 //!
 //! Both rest on the eigensolver's backward error taken as c·d·u·‖W̃(λ)‖_F, a model rather than a
 //! theorem with these constants: [`crate::dual::algorithm1`] proves the shift found here again,
-//! by a factorization whose residual is measured ([`crate::certify::SparseCertifier::prove_shift`]).
+//! by a factorization whose residual is measured
+//! ([`crate::certify::SparseCertifier::prove_shift`]).
 
 use crate::linalg::eigen::{hermitian_eigen, hermitian_eigenvalues};
 use crate::problem::matrix::PoseGraphMatrix;

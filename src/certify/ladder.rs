@@ -6,6 +6,8 @@
 //! itself, λ_{k+1}(B) ≥ θ = μ − ‖E‖). Used by [`super::sparse::SparseCertifier`] and
 //! [`crate::se3::certificate`].
 
+use crate::linalg::residual::Chunk;
+
 /// D_k = 2^{−⌊log₂(a)/2⌋} for a diagonal entry a > 0: D_k² a lies in [1, 4), and scaling by it is
 /// exact.
 pub fn power_of_two_scale(a: f64) -> f64 {
@@ -128,6 +130,28 @@ pub enum Ladder {
     Hidden { mu: f64, floor: f64 },
     /// No shift isolates k eigenvalues, or a factorization could not be formed.
     Failed,
+}
+
+/// θ = μ − ‖E‖ − `rest` at a rung the rounding hid ([`Ladder::Hidden`]), with ‖E‖ the LDLᴴ's
+/// residual measured (`measure(chunk)`: `SparseFactor::ldlt_residual_bound` of the factor at μ,
+/// by the wide chunks, then the narrow) in place of its a-priori bound; `rest` the other
+/// roundings (the shifted diagonal's and the assembly's). `Ok(θ)` where positive, else
+/// `Err(‖E‖)` as last measured (`None`: not measurable).
+pub fn measured_theta(
+    mu: f64,
+    rest: f64,
+    measure: impl Fn(Chunk) -> Option<f64>,
+) -> Result<f64, Option<f64>> {
+    let mut measured = None;
+    for chunk in [Chunk::Wide, Chunk::Narrow] {
+        let error = measure(chunk).ok_or(measured)?;
+        let theta = mu - error - rest;
+        if theta > 0.0 {
+            return Ok(theta);
+        }
+        measured = Some(error);
+    }
+    Err(measured)
 }
 
 /// The highest shift of the ladder: B's diagonal lies in [1, 4) before the shift.

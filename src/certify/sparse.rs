@@ -1,6 +1,8 @@
-use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale, smallest_doubling};
+use crate::certify::ladder::{
+    Ladder, ShiftMemory, isolate, measured_theta, power_of_two_scale, smallest_doubling,
+};
 use crate::linalg::factor::{Layout, Permuted, Scalar, SparseFactor, ldlt_error_floor};
-use crate::linalg::residual::{Chunk, within_allowance};
+use crate::linalg::residual::within_allowance;
 use crate::linalg::roundoff::{U, gamma, modulus_bound};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{Enclosure, Point, Problem};
@@ -25,9 +27,9 @@ use std::sync::Arc;
 /// exact factor of B + ΔB with ‖ΔB‖₂ of the order of dim·u·‖B‖₂ (Higham, Accuracy and Stability of
 /// Numerical Algorithms, §10.1: the backward error of Cholesky; u the unit roundoff). pgo takes
 /// α = dim·u·‖B‖_∞ (‖B‖₂ ≤ ‖B‖_∞ for Hermitian B, summed exactly) plus the rounding of B's own
-/// diagonal and of W̃'s assembly. The first is a model (the worst-case componentwise bound, γ_k times the fill, would be
-/// ~100x larger and the bound it gives too loose to certify at 1e-6), so the LLᴴ that succeeds at
-/// the η returned is checked against it: its residual ΔB = L Lᴴ − B, measured
+/// diagonal and of W̃'s assembly. The first is a model (the worst-case componentwise bound, γ_k
+/// times the fill, would be ~100x larger and the bound it gives too loose to certify at 1e-6),
+/// so the LLᴴ that succeeds at the η returned is checked against it: its residual ΔB = L Lᴴ − B, measured
 /// ([`SparseFactor::llt_residual_bound`], some 50 units of rounding per entry), must lie within
 /// dim·u·‖B‖_∞ (α holds the assembly's rounding apart). Then D(W̃(λ) + ηP)D ⪰ αI − ΔB ⪰ 0 is
 /// proven outright, i.e. W̃(λ) + ηP ⪰ 0.
@@ -286,17 +288,10 @@ impl SparseCertifier {
     /// for the exact W̃. Where the residual exceeds the allowance (small graphs, whose dim·u·‖B‖_∞
     /// is a few units), once more with an allowance twice what it showed ([`within_allowance`]).
     fn measured_llt(&mut self, problem: &Problem, lambda: &[f64], eta: f64) -> bool {
-        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
-            && !self.try_eta(problem, lambda, eta, 0.0)
-        {
-            return false;
-        }
-        let Some((_, allowance)) = self.last_llt else {
-            return false;
-        };
+        let last = self.last_llt.filter(|&(e, _)| e == eta.to_bits());
         within_allowance(
             self,
-            allowance,
+            last.map(|(_, allowance)| allowance),
             |c, chunk| {
                 let a = factored(&c.upper, &c.permuted, &c.values);
                 c.factor.llt_residual_bound(a, chunk)
@@ -576,7 +571,8 @@ impl SparseCertifier {
     /// ([`SparseFactor::ldlt_residual_bound`]: the residual of the stored factors, within some
     /// 50 units of rounding per entry where the a-priori bound counts 2k + 8, k up to thousands
     /// in the top separators of 10⁶ poses and more: at 10⁶ 1.7e-13 against 3.3e-11; then, if
-    /// that falls short, within 4 units, [`Chunk::Narrow`]).
+    /// that falls short, within 4 units, [`crate::linalg::residual::Chunk::Narrow`]: the shared
+    /// [`measured_theta`]).
     /// `Err(measured)` where it did not prove the gap either (`None`: not measured).
     fn measured_gap(
         &mut self,
@@ -592,17 +588,15 @@ impl SparseCertifier {
             return Err(None);
         }
         let a = factored(&self.upper, &self.permuted, &self.values);
-        let mut measured = None;
-        for chunk in [Chunk::Wide, Chunk::Narrow] {
-            let error = self.factor.ldlt_residual_bound(a, chunk).ok_or(None)? + form;
-            let theta = mu - error - assembly;
-            if theta > 0.0 {
+        match measured_theta(mu, form + assembly, |chunk| {
+            self.factor.ldlt_residual_bound(a, chunk)
+        }) {
+            Ok(theta) => {
                 self.shifts.remember_shift(mu);
-                return Ok(Gap::new(negative, theta));
+                Ok(Gap::new(negative, theta))
             }
-            measured = Some(error);
+            Err(measured) => Err(measured.map(|error| error + form)),
         }
-        Err(measured)
     }
 
     /// [`Self::gap`] at shift `mu` (and at most two shifts 8 and 64 times smaller while more than

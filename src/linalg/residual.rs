@@ -295,15 +295,20 @@ impl<T: Double> SparseFactor<T> {
 /// Whether a shifted LLᴴ's claim holds by its measured residual, for the certificates' fallback
 /// (`certify_cholesky`, planar and 3D): `measure(state, chunk)` bounds the residual of the LLᴴ
 /// at hand ([`SparseFactor::llt_residual_bound`]), `allowance` is what its shift α gave the
-/// factorization's rounding. By the wide chunks, then the narrow; where the residual shown
-/// exceeds the allowance, `again(state, rounding)` factors once more with that much allowed
-/// (twice the residual shown; the new allowance, or `None` where that LLᴴ fails), measured again.
+/// factorization's rounding (`None`: the LLᴴ at hand is not the one to check; then
+/// `again(state, 0.0)` factors it first). By the wide chunks, then the narrow; where the
+/// residual shown exceeds the allowance, `again(state, rounding)` factors once more with that
+/// much allowed (twice the residual shown; the new allowance, or `None` where that LLᴴ fails),
+/// measured again.
 pub fn within_allowance<S>(
     state: &mut S,
-    allowance: f64,
+    allowance: Option<f64>,
     measure: impl Fn(&S, Chunk) -> Option<f64>,
     mut again: impl FnMut(&mut S, f64) -> Option<f64>,
 ) -> bool {
+    let Some(allowance) = allowance.or_else(|| again(state, 0.0)) else {
+        return false;
+    };
     let (mut allowance, mut shown) = (allowance, f64::INFINITY);
     for retry in [false, true] {
         if retry {

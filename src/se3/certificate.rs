@@ -33,9 +33,9 @@
 //! [`crate::certify::SparseCertifier::certify_cholesky`]).
 
 use super::problem::{Point3, Problem3};
-use crate::certify::ladder::{Ladder, ShiftMemory, isolate, power_of_two_scale};
+use crate::certify::ladder::{Ladder, ShiftMemory, isolate, measured_theta, power_of_two_scale};
 use crate::linalg::factor::{Assembly, Layout, SparseFactor, ldlt_error_floor};
-use crate::linalg::residual::{Chunk, within_allowance};
+use crate::linalg::residual::within_allowance;
 use crate::linalg::roundoff::{U, gamma};
 
 /// What [`Certifier3::certify`] proved.
@@ -273,13 +273,23 @@ impl Certifier3 {
         mu: f64,
         n1: usize,
     ) -> Option<(usize, f64)> {
+        let (negative, form) = self.ldlt_shifted(lambda, scale, mu, n1)?;
+        Some((negative, self.factor.ldlt_backward_error() + form))
+    }
+
+    /// The LDLᵀ of [`Self::inertia_at`]: `Some((negative pivots, the rounding of forming
+    /// D S D − μI))`.
+    fn ldlt_shifted(
+        &mut self,
+        lambda: &[[[f64; 3]; 3]],
+        scale: &[f64],
+        mu: f64,
+        n1: usize,
+    ) -> Option<(usize, f64)> {
         let form = self.fill(lambda, scale, 0.0, mu, n1);
         self.factorizations += 1;
         self.factor.ldlt(self.assembly.matrix.as_ref()).ok()?;
-        Some((
-            self.factor.inertia_below(0.0),
-            self.factor.ldlt_backward_error() + form,
-        ))
+        Some((self.factor.inertia_below(0.0), form))
     }
 
     /// θ ≤ λ_{k+1}(D S D) by the inertia of D S D − μI: the planar certificate's shift ladder
@@ -319,24 +329,17 @@ impl Certifier3 {
         k: usize,
         n1: usize,
     ) -> Option<(f64, usize)> {
-        let form = self.fill(lambda, scale, 0.0, mu, n1);
-        self.factorizations += 1;
-        self.factor.ldlt(self.assembly.matrix.as_ref()).ok()?;
-        let negative = self.factor.inertia_below(0.0);
+        let (negative, form) = self.ldlt_shifted(lambda, scale, mu, n1)?;
         if negative > k {
             return None;
         }
-        for chunk in [Chunk::Wide, Chunk::Narrow] {
-            let measured = self
-                .factor
-                .ldlt_residual_bound(self.assembly.matrix.as_ref(), chunk)?;
-            let theta = mu - measured - form - assembly;
-            if theta > 0.0 {
-                self.shifts.remember_shift(mu);
-                return Some((theta, negative));
-            }
-        }
-        None
+        let a = self.assembly.matrix.as_ref();
+        let theta = measured_theta(mu, form + assembly, |chunk| {
+            self.factor.ldlt_residual_bound(a, chunk)
+        })
+        .ok()?;
+        self.shifts.remember_shift(mu);
+        Some((theta, negative))
     }
 
     /// Takes the values of a factor that is no longer needed (the Newton descent's, in
@@ -460,17 +463,10 @@ impl Certifier3 {
     /// rounding, else once more with twice what it showed ([`within_allowance`]), as in the
     /// planar certificate ([`crate::certify::SparseCertifier`]).
     fn measured_llt(&mut self, problem: &Problem3, lambda: &[[[f64; 3]; 3]], eta: f64) -> bool {
-        if self.last_llt.map(|(e, _)| e) != Some(eta.to_bits())
-            && !self.try_eta(problem, lambda, eta, 0.0)
-        {
-            return false;
-        }
-        let Some((_, allowance)) = self.last_llt else {
-            return false;
-        };
+        let last = self.last_llt.filter(|&(e, _)| e == eta.to_bits());
         within_allowance(
             self,
-            allowance,
+            last.map(|(_, allowance)| allowance),
             |c, chunk| {
                 c.factor
                     .llt_residual_bound(c.assembly.matrix.as_ref(), chunk)
