@@ -367,22 +367,40 @@ fn the_report_says_what_ran_and_warns_of_an_unused_solver() {
         header(&out)
     );
 
-    // MIT (808 poses, staircase) and a triangle (sdp) in one file.
+    // MIT (808 poses, staircase), a triangle (sdp) and a chain of three poses (a tree, composed)
+    // in one file.
     let dir = Dir::new();
     let mut bytes = std::fs::read(dataset("MIT.g2o")).unwrap();
+    let chain = b"VERTEX_SE2 6000 0 0 0\nVERTEX_SE2 6001 3 1 2\nVERTEX_SE2 6002 -1 0 0\n\
+          EDGE_SE2 6000 6001 1 0 0.5 1 0 0 1 0 1\nEDGE_SE2 6002 6001 0 1 0 1 0 0 1 0 1\n";
     bytes.extend_from_slice(
         b"VERTEX_SE2 5000 0 0 0\nVERTEX_SE2 5001 1 0 0\nVERTEX_SE2 5002 1 1 0\n\
           EDGE_SE2 5000 5001 1 0 0 1 0 0 1 0 1\nEDGE_SE2 5001 5002 0 1 0 1 0 0 1 0 1\n\
           EDGE_SE2 5002 5000 -1 -1.1 0.1 1 0 0 1 0 1\n",
     );
+    bytes.extend_from_slice(chain);
     let mixed = dir.file("mixed.g2o", &bytes);
     let out = solve(&[s(&mixed), "-o", "/dev/null"]);
     assert!(
-        header(&out).ends_with("; method auto: sdp (ipm) on 1 component, staircase on 1"),
+        header(&out)
+            .ends_with("; method auto: sdp (ipm) on 1 component, staircase on 1, tree on 1"),
         "{}",
         header(&out)
     );
     assert!(!text(&out.stderr).contains("warning"));
+    // The chain alone: its lower bound 0 and why, no computation.
+    let out = solve(&[s(&dir.file("chain.g2o", chain)), "-o", "/dev/null"]);
+    assert!(
+        header(&out).ends_with("; method auto: tree"),
+        "{}",
+        header(&out)
+    );
+    let report = text(&out.stderr);
+    assert!(report.contains("\n  lower bound          0\n"), "{report}");
+    assert!(
+        report.contains("SZEP                 yes (a tree: lambda* = 0"),
+        "{report}"
+    );
 
     // --solver where no component runs the SDP: a warning, the same report.
     let mit = dataset("MIT.g2o");

@@ -9,7 +9,7 @@ complete -c pgo-solve -l to -d 'Output format [default: from the output\'s exten
 toro\t'TORO: `VERTEX2`/`VERTEX`, `EDGE2`/`EDGE` (docs/formats.md §3)'"
 complete -c pgo-solve -l weights -d 'Edge weights: unit (the paper\'s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth: the SE-Sync/CPL-SLAM objective)' -r -f -a "unit\t'τ = κ = 1: exactly the paper\'s cost (5)/(8)'
 isotropic\t'τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)'"
-complete -c pgo-solve -l method -d 'Solution method [auto: sdp for components of at most 100 poses, else staircase]' -r -f -a "auto\t'sdp for components of at most 100 poses, staircase beyond'
+complete -c pgo-solve -l method -d 'Solution method [auto: sdp for components of at most 100 poses, else staircase; a tree (no loop closure) is composed, f* = 0]' -r -f -a "auto\t'sdp for components of at most 100 poses, staircase beyond; a tree composed (Prop. 1)'
 sdp\t'Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)'
 staircase\t'The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase'"
 complete -c pgo-solve -l solver -d 'SDP solver for the dual, on the components the sdp method solves (a warning if none) [default: ipm]' -r -f -a "ipm\t'The dedicated primal-dual interior-point method (default build)'

@@ -27,7 +27,7 @@ g2o-cov\:"Covariance, g2o order"))' \
 toro\:"TORO\: \`VERTEX2\`/\`VERTEX\`, \`EDGE2\`/\`EDGE\` (docs/formats.md §3)"))' \
 '--weights=[Edge weights\: unit (the paper'\''s cost (5)) or isotropic (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth\: the SE-Sync/CPL-SLAM objective)]:POLICY:((unit\:"τ = κ = 1\: exactly the paper'\''s cost (5)/(8)"
 isotropic\:"τ = 2 / tr(Ω_tt⁻¹), κ = 2 Ω_θθ\: the objective of SE-Sync and CPL-SLAM (their κ‖R_j − R_i R_ij‖²_F equals 2κ|r_j − r_i R_ij|² for planar rotations)"))' \
-'--method=[Solution method \[auto\: sdp for components of at most 100 poses, else staircase\]]:METHOD:((auto\:"sdp for components of at most 100 poses, staircase beyond"
+'--method=[Solution method \[auto\: sdp for components of at most 100 poses, else staircase; a tree (no loop closure) is composed, f* = 0\]]:METHOD:((auto\:"sdp for components of at most 100 poses, staircase beyond; a tree composed (Prop. 1)"
 sdp\:"Algorithm 1\: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)"
 staircase\:"The scalable solver\: Riemannian Newton, sparse certificate, Riemannian staircase"))' \
 '--solver=[SDP solver for the dual, on the components the sdp method solves (a warning if none) \[default\: ipm\]]:SOLVER:((ipm\:"The dedicated primal-dual interior-point method (default build)"

@@ -359,10 +359,11 @@ def solve(
     ``weights``: "isotropic" (tau = 2/tr(inv(Omega_tt)), kappa = 2 Omega_thth, the SE-Sync
     objective) or "unit"; ``tol``: the relative suboptimality bound under which the result is
     called certified; ``method``: "auto" (the SDP for components of at most 100 poses, else the
-    staircase), "sdp" or "staircase"; ``solver``, ``max_rank``, ``staircase_budget`` (in 10^9
-    multiply-adds) and ``refine`` (Levenberg-Marquardt under the full information matrices after
-    certification) are pgo-solve's flags of the same names (``solver``: "ipm", the default, or
-    "clarabel"). Each connected component is solved on its own.
+    staircase; a tree, no loop closure, composed at f* = 0), "sdp" or "staircase"; ``solver``,
+    ``max_rank``, ``staircase_budget`` (in 10^9 multiply-adds) and ``refine`` (Levenberg-Marquardt
+    under the full information matrices after certification) are pgo-solve's flags of the same
+    names (``solver``: "ipm", the default, or "clarabel"). Each connected component is solved on
+    its own.
 
     A :class:`Graph3` is solved as ``pgo-solve`` solves a 3D file: SE-Sync's problem (weights
     tau = 3/tr(inv(Omega_tt)), kappa = 3/(2 tr(inv(Omega_RR))), or "unit") by the staircase on

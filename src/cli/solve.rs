@@ -86,7 +86,8 @@ pub struct Args {
     #[command(flatten)]
     pub weights: WeightArgs,
 
-    /// Solution method [auto: sdp for components of at most 100 poses, else staircase]
+    /// Solution method [auto: sdp for components of at most 100 poses, else staircase; a tree
+    /// (no loop closure) is composed, f* = 0]
     #[arg(long, value_enum, default_value = "auto")]
     pub method: Method,
 
@@ -984,19 +985,31 @@ fn solver_name(solver: SdpSolver) -> &'static str {
 /// What ran: `staircase`, `sdp (ipm)`, or per method the number of components it solved;
 /// prefixed by `auto: ` when the method was chosen per component.
 fn method_text(r: &Solution) -> String {
-    let sdp = r
-        .components
-        .iter()
-        .filter(|c| c.method == Method::Sdp)
-        .count();
-    let staircase = r.components.len() - sdp;
+    let count = |m| r.components.iter().filter(|c| c.method == m).count();
     let sdp_name = format!("sdp ({})", solver_name(r.solver));
     let plural = |n: usize| if n == 1 { "" } else { "s" };
-    let ran = match (sdp, staircase) {
-        (0, 0) => return r.method.name().to_string(),
-        (_, 0) => sdp_name,
-        (0, _) => "staircase".to_string(),
-        (a, b) => format!("{sdp_name} on {a} component{}, staircase on {b}", plural(a)),
+    let ran: Vec<(String, usize)> = [
+        (sdp_name, count(Method::Sdp)),
+        ("staircase".to_string(), count(Method::Staircase)),
+        ("tree".to_string(), count(Method::Tree)),
+    ]
+    .into_iter()
+    .filter(|(_, n)| *n > 0)
+    .collect();
+    let ran = match &ran[..] {
+        [] => return r.method.name().to_string(),
+        [(name, _)] => name.clone(),
+        [(first, a), rest @ ..] => {
+            let rest: Vec<String> = rest
+                .iter()
+                .map(|(name, b)| format!("{name} on {b}"))
+                .collect();
+            format!(
+                "{first} on {a} component{}, {}",
+                plural(*a),
+                rest.join(", ")
+            )
+        }
     };
     match r.method {
         Method::Auto => format!("auto: {ran}"),
@@ -1127,7 +1140,11 @@ fn text_report(input: &str, report: &Report) -> String {
     );
     out += &row(
         "SZEP",
-        if r.szep {
+        if r.szep && r.components.iter().all(|c| c.method == Method::Tree) {
+            // Nothing computed: the theory of trees.
+            "yes (a tree: lambda* = 0 and W(0) has one zero eigenvalue, Props. 6 and 11)"
+                .to_string()
+        } else if r.szep {
             "yes".to_string()
         } else if r.near_zero_eigenvalues == 0 {
             // Not counted: no certificate was attempted, or the rounding hid the gap.

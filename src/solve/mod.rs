@@ -10,6 +10,7 @@
 mod best;
 mod estimate;
 mod spatial;
+mod tree;
 
 pub use estimate::{CertifyOptions, EstimateComponent, EstimateReport, certify_estimate};
 pub use spatial::{Solution3, certify_estimate3, chi2_3, solve3};
@@ -31,12 +32,15 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// sdp for components of at most 100 poses, staircase beyond
+    /// sdp for components of at most 100 poses, staircase beyond; a tree composed (Prop. 1)
     Auto,
     /// Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)
     Sdp,
     /// The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase
     Staircase,
+    /// A tree (no loop closure), under auto: its measurements composed, f* = 0 (Props. 1, 11)
+    #[value(skip)]
+    Tree,
 }
 
 impl Method {
@@ -45,6 +49,7 @@ impl Method {
             Method::Auto => "auto",
             Method::Sdp => "sdp",
             Method::Staircase => "staircase",
+            Method::Tree => "tree",
         }
     }
 }
@@ -337,7 +342,7 @@ fn solve_with(
         let n = part.num_poses();
         let sdp = match options.method {
             Method::Sdp => true,
-            Method::Staircase => false,
+            Method::Staircase | Method::Tree => false,
             Method::Auto => n <= AUTO_SDP_MAX_POSES,
         };
         let run_sdp = || algorithm1::solve_connected(&part, &weights, options.solver);
@@ -377,51 +382,66 @@ fn solve_with(
             };
             solved.ok_or_else(|| Error::Invalid("the graph is not connected".into()))
         };
-        // The first method as chosen; where it certifies, its result as it is.
-        let mut algorithm1 = None;
-        let mut scalable = None;
-        if sdp {
-            algorithm1 = Some(run_sdp()?);
-        } else {
-            scalable = Some(run_staircase()?);
-        }
-        let mut first = match (&algorithm1, &scalable) {
-            (Some(a), _) => sdp_report(&part, a, options.tolerance),
-            (_, Some((s, _))) => staircase_report(&part, s, options.tolerance),
-            _ => unreachable!("one method ran"),
-        };
-        // A staircase estimate left unchecked (`certify` off) is the answer too.
-        let unchecked = !options.certify && scalable.is_some();
-        if unchecked {
-            first.not_certified_because = Some("not checked (certify off)".to_string());
-        }
-        let (mut report, mut poses) = if first.certified || unchecked {
-            let poses = match (algorithm1, scalable) {
-                (Some(a), _) => a.poses,
-                (_, Some((_, p))) => p,
-                _ => unreachable!("one method ran"),
-            };
-            (first, poses)
-        } else {
-            // Not certified: under auto the other method too (Algorithm 1 up to
-            // AUTO_SECOND_SDP_MAX_POSES poses), every rounding polished, the lowest f kept and
-            // the highest proven bound.
-            if options.method == Method::Auto {
-                if scalable.is_none() {
-                    scalable = Some(run_staircase()?);
-                } else if n <= AUTO_SECOND_SDP_MAX_POSES {
+        // A tree under auto: composed and certified without an iteration or a factorization
+        // (Props. 1, 6, 11); where the cost of the composition, all rounding, is not within the
+        // tolerance, the solvers as for any graph.
+        let tree = (options.method == Method::Auto && tree::is_tree(&part))
+            .then(|| -> crate::Result<_> {
+                check_edge_terms(&part, &weights, &weights)?;
+                Ok(tree::solve_tree(&part, &weights, options.tolerance))
+            })
+            .transpose()?
+            .filter(|(report, _)| report.certified);
+        let (mut report, mut poses) = match tree {
+            Some(solved) => solved,
+            None => {
+                // The first method as chosen; where it certifies, its result as it is.
+                let mut algorithm1 = None;
+                let mut scalable = None;
+                if sdp {
                     algorithm1 = Some(run_sdp()?);
+                } else {
+                    scalable = Some(run_staircase()?);
+                }
+                let mut first = match (&algorithm1, &scalable) {
+                    (Some(a), _) => sdp_report(&part, a, options.tolerance),
+                    (_, Some((s, _))) => staircase_report(&part, s, options.tolerance),
+                    _ => unreachable!("one method ran"),
+                };
+                // A staircase estimate left unchecked (`certify` off) is the answer too.
+                let unchecked = !options.certify && scalable.is_some();
+                if unchecked {
+                    first.not_certified_because = Some("not checked (certify off)".to_string());
+                }
+                if first.certified || unchecked {
+                    let poses = match (algorithm1, scalable) {
+                        (Some(a), _) => a.poses,
+                        (_, Some((_, p))) => p,
+                        _ => unreachable!("one method ran"),
+                    };
+                    (first, poses)
+                } else {
+                    // Not certified: under auto the other method too (Algorithm 1 up to
+                    // AUTO_SECOND_SDP_MAX_POSES poses), every rounding polished, the lowest f kept
+                    // and the highest proven bound.
+                    if options.method == Method::Auto {
+                        if scalable.is_none() {
+                            scalable = Some(run_staircase()?);
+                        } else if n <= AUTO_SECOND_SDP_MAX_POSES {
+                            algorithm1 = Some(run_sdp()?);
+                        }
+                    }
+                    best_of(
+                        &part,
+                        &weights,
+                        first,
+                        algorithm1.as_ref(),
+                        scalable.as_ref(),
+                        options.tolerance,
+                        &staircase,
+                    )
                 }
             }
-            best_of(
-                &part,
-                &weights,
-                first,
-                algorithm1.as_ref(),
-                scalable.as_ref(),
-                options.tolerance,
-                &staircase,
-            )
         };
         // The gauge: a FIX pose stays where the input has it (the solvers place pose 0 there).
         if let Some(k) = fixed {
