@@ -909,8 +909,9 @@ impl Scalar for f64 {
 
 /// Double-double complex numbers (faer's `cx128`, ~32 significant digits), for factorizations
 /// whose backward error must lie far below double precision's. The error bounds take the unit
-/// roundoff as 32·u², generous for qd's double-double sums (componentwise within a few u² of
-/// |a| + |b|), products and quotients (within about 10·u²).
+/// roundoff as [`crate::linalg::roundoff::DOUBLE_DOUBLE_U`] = 32·u², twice what each of its
+/// operations is proven to need under the weak model of rounding (sums within 5.02u² of
+/// |a| + |b|, products within 6.01u², products by a pivot's reciprocal within 15.2u²).
 impl Scalar for faer::cx128 {
     fn re(self) -> f64 {
         self.re.0 + self.re.1
@@ -921,7 +922,7 @@ impl Scalar for faer::cx128 {
     fn modulus(self) -> f64 {
         (self.re.0 * self.re.0 + self.im.0 * self.im.0).sqrt() * (1.0 + 4.0 * f64::EPSILON)
     }
-    const UNIT_ROUNDOFF: f64 = 32.0 * crate::linalg::roundoff::U * crate::linalg::roundoff::U;
+    const UNIT_ROUNDOFF: f64 = crate::linalg::roundoff::DOUBLE_DOUBLE_U;
 }
 
 impl Scalar for c64 {

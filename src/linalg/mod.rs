@@ -3,8 +3,9 @@
 //! ([`residual`]), a block system with its factorization in
 //! 32-bit indices where they fit ([`block_system`]), the shift-invert subspace iteration for the
 //! smallest eigenvalues of a sparse Hermitian pencil ([`subspace`]), dense Hermitian
-//! eigendecompositions ([`eigen`]), the unit roundoff and Higham's γ_k ([`roundoff`]), the
-//! seeded generator of random starts and simulations ([`rng`]), and independent tasks side by
+//! eigendecompositions ([`eigen`]), the unit roundoffs of double and double-double arithmetic
+//! and Higham's γ_k ([`roundoff`]), the seeded generator of random starts and simulations
+//! ([`rng`]), and independent tasks side by
 //! side on two cores with the same bits as on one ([`parallel`]), a supernodal LLᴴ's solves split
 //! between two cores by subtrees of the elimination tree, faer's own bits ([`tree_solve`]), its
 //! factorization split the same way, the same values on one core as on two ([`tree_factor`]), and
