@@ -225,6 +225,66 @@ fn exact_measurements_cost_zero_and_the_poses_come_back() {
 }
 
 #[test]
+fn a_tree_is_composed_at_zero_cost_where_the_staircase_finds_its_optimum() {
+    // A random tree (pose k hangs from a random earlier pose, some edges reversed) with noisy
+    // measurements and the vertices at the truth, which the noise moves the optimum away from.
+    let mut rng = pgo::linalg::rng::Rng::new(11);
+    let (truth, _) = random_graph(60, 0, 11);
+    let pairs: Vec<(usize, usize)> = (1..truth.len())
+        .map(|k| {
+            let parent = (rng.uniform() * k as f64) as usize;
+            if rng.uniform() < 0.3 {
+                (k, parent)
+            } else {
+                (parent, k)
+            }
+        })
+        .collect();
+    let mut g = synthetic(&truth, &pairs, 0.2, 0.5, 11);
+    g.fixed = vec![7];
+    let options = SolveOptions::default();
+    let tree = solve3(&g, &options).unwrap();
+    assert_eq!(tree.components[0].method, pgo::solve::Method::Tree);
+    assert!(tree.certified && tree.szep && tree.lower_bound == 0.0);
+    // The cost of the composition, by the formula written again: rounding alone.
+    let est: Vec<Isometry3<f64>> = tree.estimate.iter().map(|p| p.to_isometry()).collect();
+    let f = formula(&g, &est);
+    assert!(f < 1e-20 && tree.cost < 1e-20, "{f} {}", tree.cost);
+    assert_eq!(tree.estimate[7], g.poses[7], "the FIX pose stays as read");
+    // The staircase, asked for, independently: certified at a cost of rounding too, at the same
+    // poses up to rounding.
+    let asked = SolveOptions {
+        method: pgo::solve::Method::Staircase,
+        ..Default::default()
+    };
+    let staircase = solve3(&g, &asked).unwrap();
+    assert_eq!(
+        staircase.components[0].method,
+        pgo::solve::Method::Staircase
+    );
+    assert!(
+        staircase.certified && staircase.cost < 1e-12,
+        "{}",
+        staircase.cost
+    );
+    for (a, b) in tree.estimate.iter().zip(&staircase.estimate) {
+        let (a, b) = (a.to_isometry(), b.to_isometry());
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-8);
+        assert!(a.rotation.angle_to(&b.rotation) < 1e-8);
+    }
+    // One loop closure more: no longer a tree.
+    let mut closed = g.clone();
+    closed.edges.push(Edge3 {
+        i: 0,
+        j: 59,
+        ..g.edges[0]
+    });
+    let solved = solve3(&closed, &options).unwrap();
+    assert_eq!(solved.components[0].method, pgo::solve::Method::Staircase);
+    assert!(solved.cost > 1e-3);
+}
+
+#[test]
 #[allow(clippy::needless_range_loop)]
 fn at_the_certified_optimum_s_annihilates_x_and_the_bound_is_below_the_cost() {
     let g = read("smallGrid3D.g2o");

@@ -820,8 +820,26 @@ fn run3(
 fn text_report3(input: &str, report: &Report3) -> String {
     let r = report.solution;
     let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let trees = r
+        .components
+        .iter()
+        .filter(|c| c.method == Method::Tree)
+        .count();
+    let staircase = format!(
+        "staircase (SE(3): Stiefel manifold, rank {})",
+        r.components
+            .iter()
+            .filter_map(|c| c.rank)
+            .max()
+            .unwrap_or(3)
+    );
+    let method = match trees {
+        0 => staircase,
+        t if t == r.components.len() => "auto: tree".to_string(),
+        t => format!("auto: {staircase}, tree on {t} component{}", plural(t)),
+    };
     let mut out = format!(
-        "pgo-solve: {}: {} pose{}, {} edge{}, 3D, {} component{}; weights {}; method staircase (SE(3): Stiefel manifold, rank {})\n",
+        "pgo-solve: {}: {} pose{}, {} edge{}, 3D, {} component{}; weights {}; method {method}\n",
         if input == "-" { "<stdin>" } else { input },
         r.poses,
         plural(r.poses),
@@ -830,11 +848,6 @@ fn text_report3(input: &str, report: &Report3) -> String {
         r.components.len(),
         plural(r.components.len()),
         r.weights.name(),
-        r.components
-            .iter()
-            .filter_map(|c| c.rank)
-            .max()
-            .unwrap_or(3),
     );
     out += &row("cost", num(r.cost));
     out += &row(
@@ -853,7 +866,10 @@ fn text_report3(input: &str, report: &Report3) -> String {
     );
     out += &row(
         "exact relaxation",
-        if r.szep {
+        if r.szep && trees == r.components.len() {
+            // Nothing computed: the theory of trees.
+            "yes (a tree: Lambda* = 0 and S = Q has exactly 3 eigenvalues at zero)".to_string()
+        } else if r.szep {
             "yes (S has exactly 3 eigenvalues at zero, the rest proven positive)".to_string()
         } else {
             "not shown".to_string()

@@ -6,12 +6,13 @@
 //! to SE-Sync's reported optima).
 
 use super::estimate::{CertifyOptions, EstimateComponent, EstimateReport};
+use super::tree::{compose3, is_tree3};
 use super::{ComponentReport, Method, SolveOptions, within};
 use crate::error::Error;
 use crate::graph3::{Form3, Graph3, Pose3, Rotation3};
 use crate::problem::weights::Weights;
 use crate::se3::local::Step3;
-use crate::se3::problem::weights3;
+use crate::se3::problem::{edge_term, weights3};
 use crate::se3::rounding::Rt;
 use crate::se3::{
     Options3, certify_estimate3 as certify_component, check3, components3, rt_of, solve_graph3,
@@ -133,37 +134,58 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
     let mut step = 0u64;
     for (part, members) in &parts {
         let weights = weights3(part, unit)?;
-        let s = solve_graph3(part, &weights, &staircase, &mut |it: Step3| {
-            step += 1;
-            crate::progress::iteration(
-                step,
-                &[
-                    ("cost", it.cost),
-                    ("gradient_norm", it.gradient_norm),
-                    ("rank", it.rank as f64),
-                    ("damping", it.damping),
-                ],
-            );
-        });
         // The gauge: the FIX pose (else the first) where the input has it.
         let g = part.fixed.first().copied().unwrap_or(0);
-        let to_input = part.poses[g].to_isometry() * isometry(&s.poses[g]).inverse();
-        for (k, (pose, &at)) in s.poses.iter().zip(members).enumerate() {
-            estimate[at] = if k == g {
-                part.poses[g]
-            } else {
-                pose_in(graph.form, &(to_input * isometry(pose)))
-            };
-        }
-        let proven = s.bound.is_some() || s.lower_bound > 0.0;
-        let deflated = s.bound.and_then(|b| b.deflated);
-        let suboptimality_bound = s.cost - s.lower_bound;
+        // A tree under auto: composed and certified with nothing computed (`super::tree`);
+        // where the cost of the composition, all rounding, is not within the tolerance, the
+        // staircase as for any graph.
+        let tree = (options.method == Method::Auto && is_tree3(part))
+            .then(|| {
+                let poses = compose3(part, g, |x| pose_in(graph.form, x));
+                let f = part
+                    .edges
+                    .iter()
+                    .zip(&weights)
+                    .fold(0.0, |a, (e, w)| a + edge_term(e, *w, &poses));
+                (poses, f)
+            })
+            .filter(|(_, f)| within(*f, *f, options.tolerance));
+        let mut report = match tree {
+            Some((poses, f)) => {
+                for (pose, &at) in poses.iter().zip(members) {
+                    estimate[at] = *pose;
+                }
+                tree_report(part, f)
+            }
+            None => {
+                let s = solve_graph3(part, &weights, &staircase, &mut |it: Step3| {
+                    step += 1;
+                    crate::progress::iteration(
+                        step,
+                        &[
+                            ("cost", it.cost),
+                            ("gradient_norm", it.gradient_norm),
+                            ("rank", it.rank as f64),
+                            ("damping", it.damping),
+                        ],
+                    );
+                });
+                let to_input = part.poses[g].to_isometry() * isometry(&s.poses[g]).inverse();
+                for (k, (pose, &at)) in s.poses.iter().zip(members).enumerate() {
+                    estimate[at] = if k == g {
+                        part.poses[g]
+                    } else {
+                        pose_in(graph.form, &(to_input * isometry(pose)))
+                    };
+                }
+                staircase_report(part, &s)
+            }
+        };
         let part_estimate: Vec<Pose3> = members.iter().map(|&k| estimate[k]).collect();
-        let certified_chi2 = chi2_3(part, &part_estimate);
+        report.certified_chi2 = chi2_3(part, &part_estimate);
         for (pose, &at) in part_estimate.iter().zip(members) {
             certified_estimate[at] = *pose;
         }
-        let mut refined = None;
         if options.refine {
             // Levenberg-Marquardt holds the FIX pose (or the first) where it is.
             crate::progress::phase("refinement (Levenberg-Marquardt, SE(3))");
@@ -171,34 +193,10 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
             for (pose, &at) in r.poses.iter().zip(members) {
                 estimate[at] = *pose;
             }
-            refined = Some(r);
+            report.refined_chi2 = Some(r.chi2);
+            report.refine_iterations = Some(r.iterations);
         }
-        reports.push(ComponentReport {
-            first_id: part.ids[0],
-            poses: part.num_poses(),
-            edges: part.edges.len(),
-            landmarks: 0,
-            observations: 0,
-            cost: s.cost,
-            lower_bound: s.lower_bound,
-            suboptimality_bound,
-            certified: s.certified && proven,
-            szep: deflated == Some(3),
-            near_zero_eigenvalues: deflated.unwrap_or(0),
-            method: Method::Staircase,
-            rounding: None,
-            penalized_eigenvalues: None,
-            sdp_iterations: None,
-            sdp_converged: None,
-            rank: Some(s.rank),
-            iterations: Some(s.iterations),
-            eta: s.bound.map(|b| b.eta),
-            gradient_norm: Some(s.gradient_norm),
-            certified_chi2,
-            refined_chi2: refined.as_ref().map(|r| r.chi2),
-            refine_iterations: refined.as_ref().map(|r| r.iterations),
-            not_certified_because: s.not_certified_because.clone(),
-        });
+        reports.push(report);
     }
     let cost = reports.iter().fold(0.0, |a, c| a + c.cost);
     let lower_bound = reports.iter().fold(0.0, |a, c| a + c.lower_bound);
@@ -238,6 +236,70 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
         components: reports,
         estimate,
     })
+}
+
+/// The report of a component the staircase solved.
+fn staircase_report(part: &Graph3, s: &crate::se3::Solution3) -> ComponentReport {
+    let proven = s.bound.is_some() || s.lower_bound > 0.0;
+    let deflated = s.bound.and_then(|b| b.deflated);
+    ComponentReport {
+        rank: Some(s.rank),
+        iterations: Some(s.iterations),
+        eta: s.bound.map(|b| b.eta),
+        gradient_norm: Some(s.gradient_norm),
+        not_certified_because: s.not_certified_because.clone(),
+        ..part_report(
+            part,
+            Method::Staircase,
+            (s.cost, s.lower_bound),
+            s.certified && proven,
+            deflated,
+        )
+    }
+}
+
+/// The report of a tree, composed at cost `f` (`super::tree`): the lower bound 0 and the 3 zero
+/// eigenvalues of S = Q that the theory of trees gives.
+fn tree_report(part: &Graph3, f: f64) -> ComponentReport {
+    part_report(part, Method::Tree, (f, 0.0), true, Some(3))
+}
+
+/// What every method reports of a 3D component: `bounds` = (cost, lower bound), `deflated` the
+/// zero eigenvalues of S proven (3: the relaxation is exact).
+fn part_report(
+    part: &Graph3,
+    method: Method,
+    bounds: (f64, f64),
+    certified: bool,
+    deflated: Option<usize>,
+) -> ComponentReport {
+    let (cost, lower_bound) = bounds;
+    ComponentReport {
+        first_id: part.ids[0],
+        poses: part.num_poses(),
+        edges: part.edges.len(),
+        landmarks: 0,
+        observations: 0,
+        cost,
+        lower_bound,
+        suboptimality_bound: cost - lower_bound,
+        certified,
+        szep: deflated == Some(3),
+        near_zero_eigenvalues: deflated.unwrap_or(0),
+        method,
+        rounding: None,
+        penalized_eigenvalues: None,
+        sdp_iterations: None,
+        sdp_converged: None,
+        rank: None,
+        iterations: None,
+        eta: None,
+        gradient_norm: None,
+        certified_chi2: None,
+        refined_chi2: None,
+        refine_iterations: None,
+        not_certified_because: None,
+    }
 }
 
 /// Bounds the suboptimality of a 3D `estimate` (one pose per pose of `graph`, in its order):

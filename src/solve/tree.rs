@@ -1,5 +1,5 @@
 //! Trees: a connected component with one edge fewer than its poses (odometry alone, no loop
-//! closure), solved and certified without an iteration or a factorization.
+//! closure), solved and certified without an iteration or a factorization, planar and 3D.
 //!
 //! - The optimum composes the measurements outward from a root (Prop. 1, Appendix 8.1): every
 //!   edge term vanishes, f* = 0.
@@ -8,9 +8,14 @@
 //!   lower bound 0, the suboptimality of the estimate its own cost (rounding alone).
 //! - The SZEP: W̃ = W̃(λ*) has a single zero eigenvalue (Prop. 6), so the relaxation's solution is
 //!   the rank-one one of this estimate.
+//! - In 3D (SE-Sync's problem) the same: the composition annihilates every term; Λ = 0 leaves
+//!   S = Q ⪰ 0, a sum of edge terms, with d = 0 = f*; and Q, anchored, has exactly 3 zero
+//!   eigenvalues: a vector of its kernel annihilates every term, so along the tree its value at
+//!   one pose (1×3) fixes every other, and the relaxation's solution is this estimate's.
 
 use super::{ComponentReport, Method, component_report};
 use crate::graph::{Pose2, PoseGraph};
+use crate::graph3::{Graph3, Pose3};
 use crate::problem::gauge::move_to_anchor;
 use crate::problem::matrix::cost;
 use crate::problem::weights::EdgeWeight;
@@ -36,6 +41,53 @@ pub(super) fn solve_tree(
     let f = cost(part, weights, &poses);
     let report = component_report(part, Method::Tree, f, 0.0, true, true, 1, tolerance);
     (report, poses)
+}
+
+/// Whether `part`, a connected 3D component, is a tree: n − 1 edges.
+pub(super) fn is_tree3(part: &Graph3) -> bool {
+    part.edges.len() + 1 == part.num_poses()
+}
+
+/// The optimum of a 3D tree `part`: its measurements composed from pose `root`, which stays
+/// exactly where the input has it, each pose in the graph's form (`form_of`).
+pub(super) fn compose3(
+    part: &Graph3,
+    root: usize,
+    form_of: impl Fn(&nalgebra::Isometry3<f64>) -> Pose3,
+) -> Vec<Pose3> {
+    crate::progress::phase("tree: the measurements composed (Prop. 1)");
+    let n = part.num_poses();
+    let mut incident = vec![Vec::new(); n];
+    for (k, e) in part.edges.iter().enumerate() {
+        incident[e.i].push(k);
+        incident[e.j].push(k);
+    }
+    let mut at: Vec<Option<nalgebra::Isometry3<f64>>> = vec![None; n];
+    at[root] = Some(part.poses[root].to_isometry());
+    let mut queue = std::collections::VecDeque::from([root]);
+    while let Some(u) = queue.pop_front() {
+        let xu = at[u].expect("queued poses are placed");
+        for &k in &incident[u] {
+            let e = &part.edges[k];
+            let v = if e.i == u { e.j } else { e.i };
+            if at[v].is_none() {
+                let z = e.measurement.to_isometry();
+                at[v] = Some(if e.i == u { xu * z } else { xu * z.inverse() });
+                queue.push_back(v);
+            }
+        }
+    }
+    at.iter()
+        .enumerate()
+        .map(|(k, x)| {
+            let x = x.expect("a connected component's poses are all reached");
+            if k == root {
+                part.poses[root]
+            } else {
+                form_of(&x)
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
