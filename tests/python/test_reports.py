@@ -66,6 +66,27 @@ def test_solve_report_equals_pgo_solve_json(tmp_path, path, options, flags):
     assert mine.read_bytes() == out.read_bytes()
 
 
+def test_a_chain_is_composed_as_pgo_solve_composes_it(tmp_path):
+    # Odometry alone (a tree): composed at f* = 0 with the bound 0 (Props. 1, 11), by the
+    # library call as by the tool, field for field and byte for byte.
+    rng = np.random.default_rng(3)
+    n = 40
+    poses = rng.normal(size=(n, 3))
+    edges = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1)
+    graph = pgo.Graph(poses, edges, rng.normal(size=(n - 1, 3)))
+    s = pgo.solve(graph)
+    assert s.certified and s.lower_bound == 0.0 and s.cost < 1e-20
+    assert [c["method"] for c in s.components] == ["tree"]
+    assert "method auto (tree)" in repr(s)
+    path, out = tmp_path / "chain.g2o", tmp_path / "cli.g2o"
+    graph.write(path)
+    cli = run_json("pgo-solve", path, "--no-timings", "-o", out)
+    assert s.to_dict() == cli
+    mine = tmp_path / "py.g2o"
+    graph.with_poses(s.poses).write(mine)
+    assert mine.read_bytes() == out.read_bytes()
+
+
 def test_absent_fields_have_defaults(mit_solution):
     d = mit_solution.to_dict()
     assert "not_certified_because" not in d and mit_solution.not_certified_because is None
