@@ -29,10 +29,11 @@ use crate::staircase::{Iteration, StaircaseOptions, StaircaseSolution, solve_gra
 use serde::Serialize;
 
 /// How each connected component is solved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// sdp for components of at most 100 poses, staircase beyond; a tree composed (Prop. 1)
+    #[default]
     Auto,
     /// Algorithm 1: dual SDP, SZEP, eigenvector scaling or null-space method (dense; up to 2000 poses)
     Sdp,
@@ -109,8 +110,8 @@ fn is_zero(v: &usize) -> bool {
     *v == 0
 }
 
-/// The result of one connected component.
-#[derive(Debug, Serialize)]
+/// The result of one connected component (`Default`: the zero report each method fills in).
+#[derive(Debug, Default, Serialize)]
 pub struct ComponentReport {
     /// Ids of the first (smallest) and last pose of the component.
     pub first_id: u32,
@@ -555,16 +556,21 @@ fn report_step() -> impl FnMut(&Iteration) {
     let mut step = 0u64;
     move |it: &Iteration| {
         step += 1;
-        crate::progress::iteration(
-            step,
-            &[
-                ("cost", it.cost),
-                ("gradient_norm", it.gradient_norm),
-                ("rank", it.rank as f64),
-                ("damping", it.damping),
-            ],
-        );
+        report_iteration(step, it.cost, it.gradient_norm, it.rank, it.damping);
     }
+}
+
+/// One Newton step of either staircase (planar or 3D), reported through [`crate::progress`].
+fn report_iteration(step: u64, cost: f64, gradient_norm: f64, rank: usize, damping: f64) {
+    crate::progress::iteration(
+        step,
+        &[
+            ("cost", cost),
+            ("gradient_norm", gradient_norm),
+            ("rank", rank as f64),
+            ("damping", damping),
+        ],
+    );
 }
 
 /// Whether `suboptimality_bound` is within the relative `tolerance` of `cost`.
@@ -600,18 +606,7 @@ fn component_report(
         szep,
         near_zero_eigenvalues,
         method,
-        rounding: None,
-        penalized_eigenvalues: None,
-        sdp_iterations: None,
-        sdp_converged: None,
-        rank: None,
-        iterations: None,
-        eta: None,
-        gradient_norm: None,
-        certified_chi2: None,
-        refined_chi2: None,
-        refine_iterations: None,
-        not_certified_because: None,
+        ..Default::default()
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::estimate::{CertifyOptions, EstimateComponent, EstimateReport};
 use super::tree::{compose3, is_tree3};
-use super::{ComponentReport, Method, SolveOptions, within};
+use super::{ComponentReport, Method, SolveOptions, report_iteration, within};
 use crate::error::Error;
 use crate::graph3::{Form3, Graph3, Pose3, Rotation3};
 use crate::problem::weights::Weights;
@@ -160,15 +160,7 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
             None => {
                 let s = solve_graph3(part, &weights, &staircase, &mut |it: Step3| {
                     step += 1;
-                    crate::progress::iteration(
-                        step,
-                        &[
-                            ("cost", it.cost),
-                            ("gradient_norm", it.gradient_norm),
-                            ("rank", it.rank as f64),
-                            ("damping", it.damping),
-                        ],
-                    );
+                    report_iteration(step, it.cost, it.gradient_norm, it.rank, it.damping);
                 });
                 let to_input = part.poses[g].to_isometry() * isometry(&s.poses[g]).inverse();
                 for (k, (pose, &at)) in s.poses.iter().zip(members).enumerate() {
@@ -278,8 +270,6 @@ fn part_report(
         first_id: part.ids[0],
         poses: part.num_poses(),
         edges: part.edges.len(),
-        landmarks: 0,
-        observations: 0,
         cost,
         lower_bound,
         suboptimality_bound: cost - lower_bound,
@@ -287,18 +277,7 @@ fn part_report(
         szep: deflated == Some(3),
         near_zero_eigenvalues: deflated.unwrap_or(0),
         method,
-        rounding: None,
-        penalized_eigenvalues: None,
-        sdp_iterations: None,
-        sdp_converged: None,
-        rank: None,
-        iterations: None,
-        eta: None,
-        gradient_norm: None,
-        certified_chi2: None,
-        refined_chi2: None,
-        refine_iterations: None,
-        not_certified_because: None,
+        ..Default::default()
     }
 }
 
