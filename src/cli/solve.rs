@@ -977,7 +977,8 @@ fn component_rows(components: &[(usize, u32, f64, f64, bool)]) -> String {
         out += &row(
             &format!("component {}", k + 1),
             format!(
-                "{poses} poses from id {first_id}: cost {}, bound {}, {}",
+                "{poses} pose{} from id {first_id}: cost {}, bound {}, {}",
+                if poses == 1 { "" } else { "s" },
                 num(cost),
                 num(lower_bound),
                 if certified {
