@@ -39,7 +39,9 @@ pub enum Method {
     Sdp,
     /// The scalable solver: Riemannian Newton, sparse certificate, Riemannian staircase
     Staircase,
-    /// A tree (no loop closure), under auto: its measurements composed, f* = 0 (Props. 1, 11)
+    /// A tree (no loop closure), under auto: its measurements composed, f* = 0 (Props. 1, 11).
+    /// Not a flag's value; asked for in [`SolveOptions`], trees so and the other components by
+    /// the staircase.
     #[value(skip)]
     Tree,
 }
@@ -383,10 +385,10 @@ fn solve_with(
             };
             solved.ok_or_else(|| Error::Invalid("the graph is not connected".into()))
         };
-        // A tree under auto: composed and certified without an iteration or a factorization
-        // (Props. 1, 6, 11); where the cost of the composition, all rounding, is not within the
-        // tolerance, the solvers as for any graph.
-        let tree = (options.method == Method::Auto && tree::is_tree(&part))
+        // A tree under auto (or asked for): composed and certified without an iteration or a
+        // factorization (Props. 1, 6, 11); where the cost of the composition, all rounding, is not
+        // within the tolerance, the solvers as for any graph.
+        let tree = (matches!(options.method, Method::Auto | Method::Tree) && tree::is_tree(&part))
             .then(|| -> crate::Result<_> {
                 check_edge_terms(&part, &weights, &weights)?;
                 Ok(tree::solve_tree(&part, &weights, options.tolerance))

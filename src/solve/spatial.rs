@@ -139,7 +139,7 @@ pub fn solve3(graph: &Graph3, options: &SolveOptions) -> crate::Result<Solution3
         // A tree under auto: composed and certified with nothing computed (`super::tree`);
         // where the cost of the composition, all rounding, is not within the tolerance, the
         // staircase as for any graph.
-        let tree = (options.method == Method::Auto && is_tree3(part))
+        let tree = (matches!(options.method, Method::Auto | Method::Tree) && is_tree3(part))
             .then(|| {
                 let poses = compose3(part, g, |x| pose_in(graph.form, x));
                 let f = part

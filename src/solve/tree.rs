@@ -158,7 +158,7 @@ mod tests {
     }
 
     #[test]
-    fn only_trees_take_the_tree_path_and_only_under_auto() {
+    fn only_trees_take_the_tree_path_under_auto_or_when_asked() {
         let g = random_tree(30, 7);
         let auto = solve(&g, &SolveOptions::default()).unwrap();
         assert_eq!(auto.components[0].method, Method::Tree);
@@ -181,5 +181,17 @@ mod tests {
         let solved = solve(&cycle, &SolveOptions::default()).unwrap();
         assert_ne!(solved.components[0].method, Method::Tree);
         assert!(solved.cost > 1e-3);
+        // Asked for (the library's option, no flag): trees so, other components by the staircase.
+        let asked = SolveOptions {
+            method: Method::Tree,
+            ..Default::default()
+        };
+        assert_eq!(
+            solve(&g, &asked).unwrap().components[0].method,
+            Method::Tree
+        );
+        let solved = solve(&cycle, &asked).unwrap();
+        assert_eq!(solved.components[0].method, Method::Staircase);
+        assert!(solved.certified);
     }
 }
