@@ -109,14 +109,19 @@ pub fn certify_estimate(
         let (lower_bound, bound_from) = match own_bound {
             Some(lb) if within(cost - lb, cost, tol) => (lb, "estimate"),
             _ => {
-                // Not certified by its own multipliers: the optimum's proven bound bounds it.
+                // Not certified by its own multipliers: the optimum's proven bound bounds it; a
+                // tree's is its optimum, 0 (Props. 1, 11), with nothing to solve.
                 let staircase = StaircaseOptions {
                     tolerance: tol,
                     ..Default::default()
                 };
-                let solved = solve_graph(&part, &weights, &staircase, &mut |_| {})
-                    .map(|(s, _)| s.lower_bound)
-                    .unwrap_or(0.0);
+                let solved = if super::tree::is_tree(&part) {
+                    0.0
+                } else {
+                    solve_graph(&part, &weights, &staircase, &mut |_| {})
+                        .map(|(s, _)| s.lower_bound)
+                        .unwrap_or(0.0)
+                };
                 match own_bound {
                     Some(lb) if lb >= solved => (lb, "estimate"),
                     _ => (solved, "solution"),

@@ -158,6 +158,29 @@ mod tests {
     }
 
     #[test]
+    fn a_trees_estimate_is_bounded_by_its_optimum_zero() {
+        // The composition moved off its optimum: its own multipliers do not certify it, and the
+        // optimum's bound, 0 for a tree, is what the staircase proves for it to rounding.
+        let g = random_tree(60, 9);
+        let w = edge_weights(&g, Weights::Isotropic).unwrap();
+        let (_, mut poses) = solve_tree(&g, &w, 1e-6);
+        for p in poses.iter_mut() {
+            p.theta += 0.05;
+            p.x += 0.1 * p.y.sin();
+        }
+        let report = crate::solve::certify_estimate(&g, &poses, &Default::default(), "x").unwrap();
+        let c = &report.components[0];
+        assert_eq!((c.lower_bound, c.bound_from), (0.0, "solution"));
+        assert!(!report.certified && report.suboptimality_bound == report.cost);
+        let (s, _) = solve_graph(&g, &w, &StaircaseOptions::default(), &mut |_| {}).unwrap();
+        assert!(
+            s.certified && s.lower_bound.abs() < 1e-9,
+            "{}",
+            s.lower_bound
+        );
+    }
+
+    #[test]
     fn only_trees_take_the_tree_path_under_auto_or_when_asked() {
         let g = random_tree(30, 7);
         let auto = solve(&g, &SolveOptions::default()).unwrap();
