@@ -272,6 +272,14 @@ fn a_tree_is_composed_at_zero_cost_where_the_staircase_finds_its_optimum() {
         assert!((a.translation.vector - b.translation.vector).norm() < 1e-8);
         assert!(a.rotation.angle_to(&b.rotation) < 1e-8);
     }
+    // pgo-certify's bound of the composition moved off its optimum: 0, the optimum's.
+    let moved: Vec<Pose3> = est
+        .iter()
+        .map(|x| pose(&(x * Isometry3::new(Vector3::new(0.1, 0.0, 0.0), Vector3::zeros()))))
+        .collect();
+    let report = certify_estimate3(&g, &moved, &CertifyOptions::default(), "x").unwrap();
+    assert_eq!(report.lower_bound, 0.0);
+    assert!(!report.certified && report.cost > 1e-3);
     // One loop closure more: no longer a tree.
     let mut closed = g.clone();
     closed.edges.push(Edge3 {
