@@ -1198,18 +1198,7 @@ mod tests {
         seed: u64,
         loops: f64,
     ) -> (Problem, Point, Vec<f64>, SparseCertifier, f64) {
-        let sim = simulate(&SimulationConfig {
-            n,
-            seed,
-            loop_probability: loops,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.0 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.0 },
-            ..Default::default()
-        });
-        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
-        let problem = Problem::new(&sim.graph, &w);
-        let point = truth_point(&problem, &sim.truth);
-        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+        let (problem, point, lambda) = at_truth(n, seed, loops, 0.0);
         let certifier = SparseCertifier::new(&problem.matrix.upper, &problem.row_order());
         let (dim, rot0) = (certifier.dim(), certifier.dim() - lambda.len());
         let mean = (rot0..dim)
@@ -1217,6 +1206,25 @@ mod tests {
             .sum::<f64>()
             / lambda.len() as f64;
         (problem, point, lambda, certifier, mean)
+    }
+
+    /// A generated graph (`n` poses, `seed`, loop closures with probability `loops`, rotation
+    /// and translation noise `sigma`) at its ground truth: the problem, the point and its
+    /// multipliers λ.
+    fn at_truth(n: usize, seed: u64, loops: f64, sigma: f64) -> (Problem, Point, Vec<f64>) {
+        let sim = simulate(&SimulationConfig {
+            n,
+            seed,
+            loop_probability: loops,
+            rotation_noise: RotationNoise::Gaussian { sigma },
+            translation_noise: TranslationNoise::Gaussian { sigma },
+            ..Default::default()
+        });
+        let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
+        let problem = Problem::new(&sim.graph, &w);
+        let point = truth_point(&problem, &sim.truth);
+        let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+        (problem, point, lambda)
     }
 
     /// A shift proven by [`SparseCertifier::prove_shift`] (the dense certificate's check) is one
@@ -1366,18 +1374,8 @@ mod tests {
     fn the_kept_permuted_pattern_factors_faers_own_copies() {
         let mut sides = Vec::new();
         for (n, loops, seed) in [(40, 0.02, 3), (300, 0.05, 7)] {
-            let sim = simulate(&SimulationConfig {
-                n,
-                seed,
-                loop_probability: loops,
-                rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
-                translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
-                ..Default::default()
-            });
-            let w = edge_weights(&sim.graph, Weights::Isotropic).unwrap();
-            let problem = &Problem::new(&sim.graph, &w);
-            let point = truth_point(problem, &sim.truth);
-            let lambda = problem.multipliers(&point, &problem.half_gradient(&point));
+            let (problem, point, lambda) = at_truth(n, seed, loops, 0.05);
+            let problem = &problem;
             let x = point.x;
             let order = problem.row_order();
             let mut kept = SparseCertifier::with_storage(&problem.matrix.upper, &order, true);

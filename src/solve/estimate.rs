@@ -111,13 +111,13 @@ pub fn certify_estimate(
             _ => {
                 // Not certified by its own multipliers: the optimum's proven bound bounds it; a
                 // tree's is its optimum, 0 (Props. 1, 11), with nothing to solve.
-                let staircase = StaircaseOptions {
-                    tolerance: tol,
-                    ..Default::default()
-                };
                 let solved = if super::tree::is_tree(&part) {
                     0.0
                 } else {
+                    let staircase = StaircaseOptions {
+                        tolerance: tol,
+                        ..Default::default()
+                    };
                     solve_graph(&part, &weights, &staircase, &mut |_| {})
                         .map(|(s, _)| s.lower_bound)
                         .unwrap_or(0.0)

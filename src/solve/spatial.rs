@@ -310,13 +310,13 @@ pub fn certify_estimate3(
             Some(lb) if within(own.cost - lb, own.cost, tol) => (lb, "estimate"),
             _ => {
                 // The optimum's proven bound; a tree's is its optimum, 0 (`super::tree`).
-                let options = Options3 {
-                    tolerance: tol,
-                    ..Default::default()
-                };
                 let solved = if is_tree3(part) {
                     0.0
                 } else {
+                    let options = Options3 {
+                        tolerance: tol,
+                        ..Default::default()
+                    };
                     solve_graph3(part, &weights, &options, &mut |_| {}).lower_bound
                 };
                 match own_bound {
