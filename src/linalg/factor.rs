@@ -1420,7 +1420,7 @@ pub fn pose_rank(
     block_work: f64,
 ) -> Vec<usize> {
     let graph = pose_graph(n, edges);
-    let pattern = graph.matrix.symbolic();
+    let pattern = graph.as_ref();
     let Some((mut rank, count)) = amd_rank(pattern) else {
         return (0..n).collect();
     };
@@ -1434,15 +1434,50 @@ pub fn pose_rank(
 }
 
 /// The pattern of the pose graph's matrix (`n` nodes, `edges`): its upper triangle, the diagonal
-/// included, each edge once.
-fn pose_graph(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Assembly<f64> {
-    let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
-    entries.extend(
-        edges
-            .filter(|(i, j)| i != j)
-            .map(|(i, j)| (i.min(j), i.max(j))),
-    );
-    Assembly::<f64>::new(n, &entries)
+/// included, each edge once, rows sorted in each column. Bucketed by column (a counting sort),
+/// each column's rows then sorted and repeated edges merged: the pattern alone, without an
+/// [`Assembly`]'s slots and values: M3500's in 0.2 ms against 0.44, ais2klinik's in 0.6 ms
+/// against 1.46, of an ordering that the first Newton step waits for (on the second core, before
+/// the Newton system's analysis).
+fn pose_graph(
+    n: usize,
+    edges: impl Iterator<Item = (usize, usize)>,
+) -> SymbolicSparseColMat<usize> {
+    let pairs: Vec<(usize, usize)> = edges
+        .filter(|(i, j)| i != j)
+        .map(|(i, j)| (i.min(j), i.max(j)))
+        .collect();
+    // Each column's edges, then its diagonal entry (the largest row of an upper column).
+    let mut col_ptr = vec![0usize; n + 1];
+    for &(_, c) in &pairs {
+        col_ptr[c + 1] += 1;
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c] + 1;
+    }
+    let mut next = col_ptr.clone();
+    let mut row_idx = vec![0usize; col_ptr[n]];
+    for &(r, c) in &pairs {
+        row_idx[next[c]] = r;
+        next[c] += 1;
+    }
+    // Sorted and merged in place, columns moved down over the merged entries.
+    let mut len = 0;
+    for c in 0..n {
+        let (from, to) = (col_ptr[c], col_ptr[c + 1]);
+        row_idx[to - 1] = c;
+        row_idx[from..to - 1].sort_unstable();
+        col_ptr[c] = len;
+        for k in from..to {
+            if k == from || row_idx[k] != row_idx[k - 1] {
+                row_idx[len] = row_idx[k];
+                len += 1;
+            }
+        }
+    }
+    col_ptr[n] = len;
+    row_idx.truncate(len);
+    SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
 }
 
 /// faer's AMD order of a graph (`pattern`: the upper triangle, diagonal included) as a rank of
@@ -2413,12 +2448,39 @@ mod tests {
                 rank.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
             }
             let graph = pose_graph(n, edges.iter().copied());
-            let work = elimination_work(graph.matrix.symbolic(), &rank);
+            let work = elimination_work(graph.as_ref(), &rank);
             assert_eq!(
                 work,
                 dense_elimination_work(n, &edges, &rank),
                 "trial {trial}"
             );
+        }
+    }
+
+    /// The pose graph's pattern is the one an [`Assembly`] of its entries builds (its general
+    /// bucketing, with slots): random graphs with repeated and reversed edges and self-loops.
+    #[test]
+    fn the_pose_graph_pattern_is_the_assembly_of_its_entries() {
+        let mut rng = crate::linalg::rng::Rng::new(41);
+        for n in [1, 2, 7, 60] {
+            let edges: Vec<(usize, usize)> = (0..3 * n)
+                .map(|_| {
+                    let i = (rng.next_u64() % n as u64) as usize;
+                    (i, (rng.next_u64() % n as u64) as usize)
+                })
+                .collect();
+            let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
+            entries.extend(
+                edges
+                    .iter()
+                    .filter(|(i, j)| i != j)
+                    .map(|&(i, j)| (i.min(j), i.max(j))),
+            );
+            let assembly = Assembly::<f64>::new(n, &entries);
+            let expected = assembly.matrix.symbolic();
+            let got = pose_graph(n, edges.iter().copied());
+            assert_eq!(got.col_ptr(), expected.col_ptr(), "n = {n}");
+            assert_eq!(got.row_idx(), expected.row_idx(), "n = {n}");
         }
     }
 
@@ -2432,7 +2494,7 @@ mod tests {
         let n = 12 * 12 * 12;
         let edges = grid_edges(12, 12, 12);
         let graph = pose_graph(n, edges.iter().copied());
-        let pattern = graph.matrix.symbolic();
+        let pattern = graph.as_ref();
         let nd = nested_dissection(pattern).expect("METIS orders a grid");
         let mut seen = vec![false; n];
         for &r in &nd {
@@ -2454,7 +2516,7 @@ mod tests {
         assert_eq!(pose_rank(n, edges.iter().copied(), SPATIAL_BLOCK_WORK), nd);
         assert_eq!(pose_rank(n, edges.iter().copied(), PLANAR_BLOCK_WORK), amd);
         let path: Vec<(usize, usize)> = (1..50).map(|k| (k - 1, k)).collect();
-        let (amd, _) = amd_rank(pose_graph(50, path.iter().copied()).matrix.symbolic()).unwrap();
+        let (amd, _) = amd_rank(pose_graph(50, path.iter().copied()).as_ref()).unwrap();
         assert_eq!(pose_rank(50, path.iter().copied(), SPATIAL_BLOCK_WORK), amd);
     }
 
