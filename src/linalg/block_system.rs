@@ -44,6 +44,20 @@ impl BlockSystem {
         order: &[usize],
         split_min_work: f64,
     ) -> Self {
+        Self::announcing(sizes, blocks, order, split_min_work, |_, _| ())
+    }
+
+    /// [`BlockSystem::new`], telling `counted` the dimension and the factor's number of values
+    /// as soon as the analysis knows them, before the rest of the preparation (the split
+    /// between the cores, the own factorization's plan): a thread waiting for the system can
+    /// map the pages of its values meanwhile ([`crate::linalg::heap::Room`]).
+    pub fn announcing(
+        sizes: &[usize],
+        blocks: &[(usize, usize)],
+        order: &[usize],
+        split_min_work: f64,
+        counted: impl FnOnce(usize, usize),
+    ) -> Self {
         let layout = Layout::Supernodal;
         let side = layout.stored_side();
         let narrow =
@@ -57,6 +71,10 @@ impl BlockSystem {
             let factor = SparseFactor::analyze_in_order(assembly.matrix.symbolic(), side, layout);
             Indexed::Wide(assembly, factor)
         });
+        indexed!(&indexed, |_assembly, factor| counted(
+            factor.dim(),
+            factor.values_len()
+        ));
         indexed!(&mut indexed, |_assembly, factor| {
             factor.prepare_split();
             factor.prepare_own_factorization(split_min_work);

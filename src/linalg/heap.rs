@@ -114,13 +114,16 @@ fn populate(from: usize, to: usize) {
 /// the second core allocates it ([`Room::prepare`]) and maps its pages chunk by chunk
 /// ([`Room::map`]); the thread that factors takes it when its first factorization comes
 /// ([`Room::take`]), mapping the chunks still unclaimed itself, so that it waits for one chunk
-/// at most instead of the whole room. A page's first write costs a page fault (about 1 µs
-/// here); a first factorization that faults its own pages pays them on the thread that factors
-/// (torus3D's first Newton LLᵀ took 43 ms on fresh pages, the second 30 ms). Where the thread
-/// that factors comes first (one core, or a second core still busy before the room), it takes
-/// nothing and the room is never made.
+/// at most instead of the whole room; while it waits for the factor's analysis it maps the room
+/// as soon as that sizes it ([`Room::map_once_prepared`]). A page's first write costs a page
+/// fault (about 1 µs here); a first factorization that faults its own pages pays them on the
+/// thread that factors (torus3D's first Newton LLᵀ took 43 ms on fresh pages, the second 30
+/// ms). Where the thread that factors comes first (one core, or a second core still busy before
+/// the room), it takes nothing and the room is never made.
 pub struct Room {
     state: std::sync::Mutex<RoomState>,
+    /// Signalled when the state leaves `Waiting` ([`Room::map_once_prepared`]).
+    settled: std::sync::Condvar,
     /// The next chunk to claim.
     next: std::sync::atomic::AtomicUsize,
     /// The chunks mapped.
@@ -152,6 +155,7 @@ impl Room {
     pub fn new() -> Self {
         Room {
             state: std::sync::Mutex::new(RoomState::Waiting),
+            settled: std::sync::Condvar::new(),
             next: Default::default(),
             done: Default::default(),
         }
@@ -169,6 +173,7 @@ impl Room {
         let mut state = self.state();
         if let RoomState::Waiting = *state {
             *state = RoomState::Ready(vec![0.0f64; len]);
+            self.settled.notify_all();
         }
     }
 
@@ -232,7 +237,40 @@ impl Room {
         let mut state = self.state();
         if let RoomState::Waiting = *state {
             *state = RoomState::Taken;
+            self.settled.notify_all();
         }
+    }
+
+    /// A guard that forgoes the room when dropped, also while unwinding, unless it was prepared
+    /// by then: for the thread that prepares it, so that [`Room::map_once_prepared`] never
+    /// waits for ever.
+    pub fn settled_on_drop(&self) -> SettledOnDrop<'_> {
+        SettledOnDrop(self)
+    }
+
+    /// Waits until the room is prepared (or forgone), then maps its chunks not yet claimed
+    /// ([`Room::map`]): for the thread that factors, while it waits for the factor's analysis,
+    /// which prepares the room as soon as it knows the values' count. The analysis must prepare
+    /// or forgo the room whatever happens (else this waits for ever).
+    pub fn map_once_prepared(&self) {
+        let mut state = self.state();
+        while let RoomState::Waiting = *state {
+            state = self
+                .settled
+                .wait(state)
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+        }
+        drop(state);
+        self.map();
+    }
+}
+
+/// Forgoes a [`Room`] not prepared when dropped ([`Room::settled_on_drop`]).
+pub struct SettledOnDrop<'a>(&'a Room);
+
+impl Drop for SettledOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.forgo();
     }
 }
 
@@ -298,6 +336,39 @@ mod tests {
         let room = Room::new();
         room.forgo();
         room.prepare(1000);
+        assert!(room.take().is_empty());
+    }
+
+    /// A thread that waits to map a room maps every chunk once another thread prepares it, and
+    /// stops waiting where the room is forgone instead, also by a preparer that panics before
+    /// preparing it (its guard).
+    #[test]
+    fn a_room_is_mapped_once_prepared_and_never_waited_for_in_vain() {
+        let len = 100_000;
+        let room = Room::new();
+        std::thread::scope(|scope| {
+            scope.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(20));
+                let _settled = room.settled_on_drop();
+                room.prepare(len);
+            });
+            room.map_once_prepared();
+            use std::sync::atomic::Ordering;
+            assert_eq!(room.done.load(Ordering::Acquire), chunks(len));
+        });
+        let values = room.take();
+        assert_eq!(values.len(), len);
+        assert!(values.iter().all(|&v| v == 0.0));
+        let room = Room::new();
+        std::thread::scope(|scope| {
+            let preparer = scope.spawn(|| {
+                let _settled = room.settled_on_drop();
+                std::thread::sleep(std::time::Duration::from_millis(20));
+                panic!("the analysis failed before the room");
+            });
+            room.map_once_prepared();
+            assert!(preparer.join().is_err());
+        });
         assert!(room.take().is_empty());
     }
 }

@@ -511,10 +511,24 @@ pub struct Ready<T> {
 impl<T> Ready<T> {
     /// Waits for the result and hands it over, the first time only.
     pub fn take(&self) -> Option<T> {
+        self.take_or(|| ())
+    }
+
+    /// [`Ready::take`], with `meanwhile` run on this thread first where the result has not
+    /// come yet (not where none will come: on one core, or after the first time).
+    pub fn take_or(&self, meanwhile: impl FnOnce()) -> Option<T> {
         if self.taken.replace(true) {
             return None;
         }
-        self.receive.as_ref().and_then(|r| r.recv().ok())
+        let receive = self.receive.as_ref()?;
+        match receive.try_recv() {
+            Ok(t) => Some(t),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => None,
+            Err(std::sync::mpsc::TryRecvError::Empty) => {
+                meanwhile();
+                receive.recv().ok()
+            }
+        }
     }
 }
 
@@ -800,6 +814,32 @@ mod tests {
         assert_eq!(again, None);
         assert_eq!(got, second_core().then_some(41));
         assert_eq!(spare, "spare");
+    }
+
+    /// `take_or` runs its `meanwhile` here where the result has not come yet (the first task
+    /// waits for it), then hands the result over; on one core nothing comes and nothing runs.
+    #[test]
+    fn take_or_runs_meanwhile_while_the_result_is_to_come() {
+        let (go, wait) = std::sync::mpsc::channel::<()>();
+        let ((got, ran), ()) = ahead(
+            move || {
+                // Not for ever where `meanwhile` never runs: the assertions then fail.
+                let _ = wait.recv_timeout(std::time::Duration::from_secs(10));
+                41
+            },
+            || (),
+            || (),
+            |ready, _| {
+                let ran = std::cell::Cell::new(false);
+                let got = ready.take_or(|| {
+                    ran.set(true);
+                    let _ = go.send(());
+                });
+                (got, ran.get())
+            },
+        );
+        assert_eq!(got, second_core().then_some(41));
+        assert_eq!(ran, second_core());
     }
 
     /// Whichever thread claims the spare task first computes it, and only that one.

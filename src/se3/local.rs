@@ -148,6 +148,12 @@ pub struct System {
 impl System {
     /// The system of rank p (its pattern depends on p and the graph alone).
     pub fn new(problem: &Problem3, p: usize) -> Self {
+        Self::announcing(problem, p, |_, _| ())
+    }
+
+    /// [`System::new`], telling `counted` the dimension and the factor's number of values once
+    /// its analysis knows them ([`BlockSystem::announcing`]).
+    pub fn announcing(problem: &Problem3, p: usize, counted: impl FnOnce(usize, usize)) -> Self {
         let n = problem.n;
         let dims: Vec<usize> = (0..n)
             .map(|u| {
@@ -187,7 +193,13 @@ impl System {
         // ([`SparseFactor::prepare_own_factorization`]); where it does not split, on one core
         // with the narrow supernodes by loops: smallGrid3D 0.96 of faer's time whole process (41
         // interleaved runs), tinyGrid3D 1.00.
-        let system = BlockSystem::new(&dims, &problem.pairs, &poses, SPLIT_FACTOR_MIN_WORK);
+        let system = BlockSystem::announcing(
+            &dims,
+            &problem.pairs,
+            &poses,
+            SPLIT_FACTOR_MIN_WORK,
+            counted,
+        );
         System {
             p,
             offset,
