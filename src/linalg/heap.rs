@@ -117,9 +117,9 @@ fn populate(from: usize, to: usize) {
 /// at most instead of the whole room; while it waits for the factor's analysis it maps the room
 /// as soon as that sizes it ([`Room::map_once_prepared`]). A page's first write costs a page
 /// fault (about 1 µs here); a first factorization that faults its own pages pays them on the
-/// thread that factors (torus3D's first Newton LLᵀ took 43 ms on fresh pages, the second 30
-/// ms). Where the thread that factors comes first (one core, or a second core still busy before
-/// the room), it takes nothing and the room is never made.
+/// thread that factors (torus3D's first Newton LLᵀ took 43 ms on fresh pages, the second one
+/// 30 ms). Where the thread that factors comes first (one core, or a second core still busy
+/// before the room), it takes nothing and the room is never made.
 pub struct Room {
     state: std::sync::Mutex<RoomState>,
     /// Signalled when the state leaves `Waiting` ([`Room::map_once_prepared`]).

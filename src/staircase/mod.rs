@@ -883,8 +883,8 @@ fn solve_from_start(
     // for the system (the room is allocated as soon as the analysis knows its size), and by the
     // second core before the certificate's analysis; whichever thread comes to a chunk first
     // maps it. Mapped while waiting, against after the system came (30 interleaved pairs, whole
-    // process): M3500, intel and ais2klinik 0.99, kitti_00 0.986, CSAIL 0.997; this thread
-    // mapped the room's 2 MB for 0.6 ms on M3500, 1.5 ms on ais2klinik, after the wait.
+    // process): M3500, intel and ais2klinik 0.99, kitti_00 0.986, CSAIL 0.997 (after the wait
+    // this thread had spent 0.6 ms mapping M3500's 2 MB, 1.5 ms on ais2klinik's 5.7 MB).
     //
     // The tasks left for the second core's idle time (the output's constant lines,
     // [`crate::linalg::parallel::when_idle`]) start after the certificate's analysis where the
