@@ -37,7 +37,7 @@ use crate::linalg::heap::{RELEASE_FROM_ROWS, Room};
 use crate::problem::rank_p::{Point, Problem};
 use crate::problem::weights::EdgeWeight;
 use faer::c64;
-use init::{OptimalPositions, chordal_rotations};
+use init::{OptimalPositions, chordal_rotations, refine_rotations};
 use manifold::{NewtonSystem, TangentBasis};
 
 /// One accepted (or rejected) step, for progress reports and the rerun viewer.
@@ -368,7 +368,9 @@ fn solve_anchored_here(
                 .flatten()
         };
         full()
-            .or_else(|| chordal_rotations(&anchored.problem))
+            .or_else(|| {
+                chordal_rotations(&anchored.problem).map(|r| refine_rotations(&anchored.problem, r))
+            })
             .or_else(|| {
                 (!graph.landmarks.is_empty()).then(|| {
                     let swap = swapper(anchored.anchor);
