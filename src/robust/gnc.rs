@@ -408,6 +408,8 @@ pub fn robust_solve(graph: &PoseGraph, options: &RobustOptions) -> crate::Result
             .min(options.solve.staircase_budget),
         min_descent_steps: INNER_NEWTON_STEPS,
         certify: options.certify_inner,
+        // The inlier set's problem, solved after, refines them as any solve does.
+        refine_rotations: false,
         ..options.solve
     };
     let inner = |w: &[f64], start: Option<&[Pose2]>| -> crate::Result<Solution> {

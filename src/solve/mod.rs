@@ -90,6 +90,9 @@ pub struct SolveOptions {
     /// Off, a component the staircase solves gets Riemannian Newton's rank-1 estimate with no
     /// bound (lower bound 0, not certified) and no second method under auto.
     pub certify: bool,
+    /// Whether the staircase refines noisy chordal rotations
+    /// ([`StaircaseOptions::refine_rotations`], default true).
+    pub refine_rotations: bool,
 }
 
 impl Default for SolveOptions {
@@ -104,6 +107,7 @@ impl Default for SolveOptions {
             staircase_budget: StaircaseOptions::default().staircase_budget,
             min_descent_steps: StaircaseOptions::default().min_descent_steps,
             certify: true,
+            refine_rotations: true,
         }
     }
 }
@@ -320,6 +324,7 @@ fn solve_with(
         staircase_budget: options.staircase_budget,
         min_descent_steps: options.min_descent_steps,
         certify: options.certify,
+        refine_rotations: options.refine_rotations,
         ..Default::default()
     };
     let components_of = graph.components();
