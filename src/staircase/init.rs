@@ -127,22 +127,11 @@ pub fn refine_rotations(problem: &Problem, r: Vec<c64>) -> Vec<c64> {
         return r;
     }
     // G over r_1..r_{n−1} at 0..n−2 (r_0 held: its edges add to the diagonal only).
-    let mut entries = Vec::with_capacity(3 * edges.len());
-    let mut values = Vec::with_capacity(3 * edges.len());
-    for t in &edges {
-        let w = 2.0 * t.kappa;
-        let (i, j) = (t.i.checked_sub(1), t.j.checked_sub(1));
-        for a in [i, j].into_iter().flatten() {
-            entries.push((a, a));
-            values.push(w);
-        }
-        if let (Some(i), Some(j)) = (i, j)
-            && i != j
-        {
-            entries.push((i.min(j), i.max(j)));
-            values.push(-w);
-        }
-    }
+    let (entries, values) = anchored_laplacian(
+        edges
+            .iter()
+            .map(|t| (t.i.checked_sub(1), t.j.checked_sub(1), 2.0 * t.kappa)),
+    );
     let Some(mut factor) = anchored_llt(n - 1, &problem.rotation_order(), &entries, &values) else {
         return r;
     };
@@ -238,6 +227,29 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
     )
 }
 
+/// The upper triangle of an anchored weighted Laplacian Σ w (e_a − e_b)(e_a − e_b)ᵀ, entry by
+/// entry in the terms' order (duplicates to be summed), each term given as its two rows and w; a
+/// row `None` (the anchor's) is left out, its term adding to the other row's diagonal only.
+fn anchored_laplacian(
+    terms: impl ExactSizeIterator<Item = (Option<usize>, Option<usize>, f64)>,
+) -> (Vec<(usize, usize)>, Vec<f64>) {
+    let mut entries = Vec::with_capacity(3 * terms.len());
+    let mut values = Vec::with_capacity(3 * terms.len());
+    for (i, j, w) in terms {
+        for a in [i, j].into_iter().flatten() {
+            entries.push((a, a));
+            values.push(w);
+        }
+        if let (Some(i), Some(j)) = (i, j)
+            && i != j
+        {
+            entries.push((i.min(j), i.max(j)));
+            values.push(-w);
+        }
+    }
+    (entries, values)
+}
+
 /// The LLᴴ of a `dim` x `dim` Hermitian matrix (upper-triangle entries, duplicates summed), in
 /// the given fill-reducing order. `None` if it is not numerically positive definite.
 fn anchored_llt<T: Scalar>(
@@ -282,22 +294,13 @@ impl OptimalPositions {
     /// Factors L, summed edge by edge (Σ τ over the edges at each pose on the diagonal, −τ
     /// between the poses of an edge). `None` if the graph is not connected (L singular).
     pub fn new(problem: &Problem) -> Option<Self> {
-        let mut entries = Vec::with_capacity(3 * problem.terms.len());
-        let mut values = Vec::with_capacity(3 * problem.terms.len());
-        for t in &problem.terms {
-            let tau = t.tau;
-            let (i, j) = (problem.position_row(t.i), problem.head_position_row(t));
-            for a in [i, j].into_iter().flatten() {
-                entries.push((a, a));
-                values.push(tau);
-            }
-            if let (Some(i), Some(j)) = (i, j)
-                && i != j
-            {
-                entries.push((i.min(j), i.max(j)));
-                values.push(-tau);
-            }
-        }
+        let (mut entries, mut values) = anchored_laplacian(problem.terms.iter().map(|t| {
+            (
+                problem.position_row(t.i),
+                problem.head_position_row(t),
+                t.tau,
+            )
+        }));
         // Every pose's diagonal, so that a pose without edges makes L singular, not malformed.
         for a in 0..problem.positions() {
             entries.push((a, a));
