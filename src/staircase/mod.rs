@@ -104,13 +104,14 @@ impl Default for StaircaseOptions {
 
 /// [`StaircaseOptions::staircase_budget`]'s default: 5·10¹⁰ multiply-adds, about 2.5 s on one
 /// core of a 2026 x86 machine. One Newton step at rank 1 on city10000 (10⁴ poses) factors
-/// 1·10⁸; the public planar files all certify at rank 1 in at most 12 steps, far below it. With
+/// 1·10⁸; the public planar files all certify at rank 1 in at most 8 steps, far below it. With
 /// 1000 random false loop closures one step on city10000 factors 8.9·10⁹ (the long closures fill
 /// the factor): the budget then ends the staircase in seconds, not minutes (issue 18).
 pub const STAIRCASE_BUDGET: f64 = 5e10;
 
 /// The Newton steps the first descent at rank 1 may always take, past the budget: the public
-/// files take at most 12 (M3500c), generated graphs of 10⁶ poses 7 (scripts/bench-scale), so a
+/// files take at most 8 (M3500b; M3500c took 12 before its chordal rotations were refined,
+/// [`init::refine_rotations`]), generated graphs of 10⁶ poses 7 (scripts/bench-scale), so a
 /// clean graph too large for the budget still converges. Beyond them and the budget the descent
 /// stops: on city10000 with 1000 false loop closures (Vertigo's random model) it ran the 200
 /// steps of [`StaircaseOptions::max_iterations`], 0.3 s each, still far from a minimum.
