@@ -38,20 +38,11 @@ impl BlockSystem {
     /// supernodally; its LLᵀ by our own code ([`SparseFactor::prepare_own_factorization`]: split
     /// between the cores from `split_min_work` multiply-adds), its solves split where large
     /// ([`SparseFactor::prepare_split`]). Coordinates are numbered block by block, in index order.
+    /// `counted` is told the dimension and the factor's number of values as soon as the analysis
+    /// knows them, before the rest of the preparation (the split between the cores, the own
+    /// factorization's plan): a thread waiting for the system can map the pages of its values
+    /// meanwhile ([`crate::linalg::heap::Room`]).
     pub fn new(
-        sizes: &[usize],
-        blocks: &[(usize, usize)],
-        order: &[usize],
-        split_min_work: f64,
-    ) -> Self {
-        Self::announcing(sizes, blocks, order, split_min_work, |_, _| ())
-    }
-
-    /// [`BlockSystem::new`], telling `counted` the dimension and the factor's number of values
-    /// as soon as the analysis knows them, before the rest of the preparation (the split
-    /// between the cores, the own factorization's plan): a thread waiting for the system can
-    /// map the pages of its values meanwhile ([`crate::linalg::heap::Room`]).
-    pub fn announcing(
         sizes: &[usize],
         blocks: &[(usize, usize)],
         order: &[usize],

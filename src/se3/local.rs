@@ -152,7 +152,7 @@ impl System {
     }
 
     /// [`System::new`], telling `counted` the dimension and the factor's number of values once
-    /// its analysis knows them ([`BlockSystem::announcing`]).
+    /// its analysis knows them ([`BlockSystem::new`]).
     pub fn announcing(problem: &Problem3, p: usize, counted: impl FnOnce(usize, usize)) -> Self {
         let n = problem.n;
         let dims: Vec<usize> = (0..n)
@@ -193,7 +193,7 @@ impl System {
         // ([`SparseFactor::prepare_own_factorization`]); where it does not split, on one core
         // with the narrow supernodes by loops: smallGrid3D 0.96 of faer's time whole process (41
         // interleaved runs), tinyGrid3D 1.00.
-        let system = BlockSystem::announcing(
+        let system = BlockSystem::new(
             &dims,
             &problem.pairs,
             &poses,

@@ -356,7 +356,7 @@ impl NewtonSystem {
     }
 
     /// [`NewtonSystem::new`], telling `counted` the dimension and the factor's number of values
-    /// once its analysis knows them ([`BlockSystem::announcing`]).
+    /// once its analysis knows them ([`BlockSystem::new`]).
     pub fn announcing(problem: &Problem, p: usize, counted: impl FnOnce(usize, usize)) -> Self {
         // The entries of [`TangentBasis::hessian_pattern`] come in blocks, one per entry of W̃'s
         // upper triangle: the coordinates of its row by those of its column. Rows in the
@@ -380,8 +380,7 @@ impl NewtonSystem {
         // 2015-2022 unsplit); with the 32-bit indices of [`BlockSystem`] the split runs peaked at
         // 1892-1953 MiB and took 11.6-12.5 s (six runs) against 1872-1910 MiB and 14.4-15.1 s
         // unsplit (five), and the whole tool at 1908-1938 MiB and 12.0-13.7 s in six more.
-        let system =
-            BlockSystem::announcing(&sizes, &blocks, &row_order, SPLIT_FACTOR_MIN_WORK, counted);
+        let system = BlockSystem::new(&sizes, &blocks, &row_order, SPLIT_FACTOR_MIN_WORK, counted);
         NewtonSystem { system }
     }
 
