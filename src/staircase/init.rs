@@ -9,7 +9,8 @@
 //! - Positions optimal for given rotations: ρ̃ = −L⁻¹ S̃ r̃ (eq. (24)), by a sparse Cholesky of the
 //!   anchored Laplacian L.
 
-use crate::linalg::factor::{Assembly, Layout, Permuted, Scalar, SparseFactor};
+use crate::linalg::factor::{Layout, Permuted, SparseFactor};
+use crate::linalg::laplacian::{anchored_laplacian, anchored_llt};
 use crate::problem::matrix::for_each_entry;
 use crate::problem::rank_p::{EdgeTerm, Point, Problem};
 use faer::c64;
@@ -225,46 +226,6 @@ pub fn chordal_full(problem: &Problem) -> Option<Vec<c64>> {
             }))
             .collect(),
     )
-}
-
-/// The upper triangle of an anchored weighted Laplacian Σ w (e_a − e_b)(e_a − e_b)ᵀ, entry by
-/// entry in the terms' order (duplicates to be summed), each term given as its two rows and w; a
-/// row `None` (the anchor's) is left out, its term adding to the other row's diagonal only.
-fn anchored_laplacian(
-    terms: impl ExactSizeIterator<Item = (Option<usize>, Option<usize>, f64)>,
-) -> (Vec<(usize, usize)>, Vec<f64>) {
-    let mut entries = Vec::with_capacity(3 * terms.len());
-    let mut values = Vec::with_capacity(3 * terms.len());
-    for (i, j, w) in terms {
-        for a in [i, j].into_iter().flatten() {
-            entries.push((a, a));
-            values.push(w);
-        }
-        if let (Some(i), Some(j)) = (i, j)
-            && i != j
-        {
-            entries.push((i.min(j), i.max(j)));
-            values.push(-w);
-        }
-    }
-    (entries, values)
-}
-
-/// The LLᴴ of a `dim` x `dim` Hermitian matrix (upper-triangle entries, duplicates summed), in
-/// the given fill-reducing order. `None` if it is not numerically positive definite.
-fn anchored_llt<T: Scalar>(
-    dim: usize,
-    order: &[usize],
-    entries: &[(usize, usize)],
-    values: &[T],
-) -> Option<SparseFactor<T>> {
-    let mut assembly = Assembly::<T>::new(dim, entries);
-    assembly.fill(values);
-    let mut factor = SparseFactor::analyze_ordered(assembly.matrix.symbolic(), order, Layout::Auto);
-    if dim > 0 {
-        factor.llt(assembly.matrix.as_ref()).ok()?;
-    }
-    Some(factor)
 }
 
 /// The rank-1 point [ρ̃; r̃] with the given rotations and the positions optimal for them.
