@@ -7,7 +7,9 @@
 //! - [`stiefel`]: St(3, p)^n: tangent spaces, projections, the polar retraction;
 //! - [`local`]: Riemannian Newton (damped, one symbolic factorization per rank, the
 //!   translations projected out: variable projection), SE-Sync's Algorithm 2's local step;
-//! - [`rounding`]: chordal initialization, the rank-3 rounding with the determinant's sign fixed;
+//! - [`rounding`]: chordal initialization (its rotations refined by Gauss-Newton on the rotation
+//!   cost where they are visibly off its minimum), the rank-3 rounding with the determinant's sign
+//!   fixed;
 //! - [`certificate`]: S = Q − SymBlockDiag(Λ) proven PSD (LDLᵀ inertia with a-posteriori backward
 //!   error, Lehmann-Maehly/Temple for the three deflated directions), the lower bound and gap;
 //! - this file: the Riemannian staircase (SE-Sync's Algorithm 1): Newton at rank 3 from the
@@ -35,7 +37,7 @@ use crate::linalg::heap::Room;
 use certificate::{Bound3, Certifier3};
 use local::{LocalOptions, Step3, System, Translations, optimize, optimize_with};
 use problem::{Point3, Problem3, Weight3};
-use rounding::{Rt, chordal, point_of, poses_of, round_to_rank3};
+use rounding::{Rt, chordal, point_of, poses_of, refine_rotations, round_to_rank3};
 
 /// Options of [`solve_graph3`].
 #[derive(Debug, Clone, Copy)]
@@ -191,7 +193,9 @@ fn solve_problem(
             Some(poses) => point_of(&problem, poses),
             None => {
                 crate::progress::phase("chordal initialization");
-                chordal(&problem)
+                let mut x = chordal(&problem);
+                refine_rotations(&problem, &mut x);
+                x
             }
         };
         let mut translations = translations();
