@@ -259,16 +259,16 @@ fn rotation_cost(problem: &Problem3, rotations: &[[[f64; 3]; 3]]) -> (f64, Vec<[
     (cost, gradient)
 }
 
-/// Gauss-Newton on the rotations of a rank-3 point `x` (the chordal start, the anchor's held)
-/// for the rotation part of f, Σ κ‖R_j − R_i R̃‖_F² = Σ 4κ (1 − cos θ_e) (θ_e the angle of
-/// M = R_i R̃ R_jᵀ), where the chordal rotations are visibly off that part's own minimum: the
-/// chordal relaxation drops the orthogonality constraints and projects afterwards, which on
-/// graphs with noisy rotations leaves them far from it, and Newton on the whole problem then
-/// spends its steps there. The 3D counterpart of the planar staircase's refinement, with the
-/// same rules. Each step turns R_i ← Exp(δ_i) R_i, δ solving G δ = −∇ for the Gauss-Newton
-/// matrix G = 4κ-weighted anchored Laplacian ⊗ I₃ (in world-frame turns the linearized residual
-/// of an edge is δ_i − δ_j plus its own, so G is constant: one scalar LLᵀ, three right-hand
-/// sides, for all steps).
+/// Gauss-Newton on the rotations of a rank-3 point `x` (the chordal start, the anchor's held) for
+/// the rotation part of f, Σ κ‖R_j − R_i R̃‖_F² = Σ 4κ (1 − cos θ_e) (θ_e the angle of M = R_i R̃
+/// R_jᵀ), where the chordal rotations are visibly off that part's own minimum: the chordal
+/// relaxation drops the orthogonality constraints and projects afterwards, which on graphs with
+/// noisy rotations leaves them far from it, and Newton on the whole problem then spends its steps
+/// there. The 3D counterpart of the planar staircase's refinement, with its rules but a higher gate
+/// (below). Each step turns R_i ← Exp(δ_i) R_i, δ solving G δ = −∇ for the Gauss-Newton matrix G =
+/// 4κ-weighted anchored Laplacian ⊗ I₃ (in world-frame turns the linearized residual of an edge is
+/// δ_i − δ_j plus its own, so G is constant: one scalar LLᵀ, three right-hand sides, for all
+/// steps).
 ///
 /// The refinement runs only where the Jacobi estimate of the first step's gain,
 /// ½ Σ |∇_k|²/G_kk, is at least [`ROTATION_GATE`] of the rotation cost. A step is halved until
@@ -278,13 +278,14 @@ fn rotation_cost(problem: &Problem3, rotations: &[[[f64; 3]; 3]]) -> (f64, Vec<[
 ///
 /// Newton's LLᵀ factorizations to the certified optimum from the chordal rotations against from
 /// these: sphere_bignoise_vertex3 4 to 2, smallGrid3D 5 to 4 (its first step, rejected from the
-/// chordal start, is not taken); whole process 0.79-0.82 and 0.95-0.98 of the time (15-21
+/// chordal start, is not taken); whole process 0.79-0.82 and 0.95-0.98 of the time (11-21
 /// interleaved pairs). On 72 generated worlds (sphere, torus, grid; 125, 500 and 1000 poses;
 /// rotation noise 0.05 to 0.3, two seeds) the gate opens on the 36 of noise 0.2 and 0.3: the same
 /// optima to 13 digits, all certified (relative bounds at most 9.2e-10), Newton steps fewer on 20
 /// and more on 3, whole process 0.83 to 1.16 of the time, median 0.997 (9 pairs each): a saving
 /// where the chordal start makes Newton's first steps fail, a cost where the refined start takes
-/// one more factorization. Below the gate (noise 0.1 and less) refining never saved one.
+/// one more factorization. Below the gate (noise 0.1 and less) refining saved one on 2 of 36
+/// ([`ROTATION_GATE`]).
 pub fn refine_rotations(problem: &Problem3, x: &mut Point3) {
     let n = problem.n;
     let anchor = problem.anchor;
@@ -382,7 +383,10 @@ pub fn refine_rotations(problem: &Problem3, x: &mut Point3) {
 /// The Jacobi estimate of the first step's gain, relative to the rotation cost, from which
 /// [`refine_rotations`] refines. On the public 3D files: smallGrid3D 1.9e-2 and
 /// sphere_bignoise_vertex3 1.5e-2 (refined), tinyGrid3D 7.4e-3, torus3D 1.6e-3, sphere2500
-/// 3.5e-4, cubicle 3.3e-4, parking-garage 3e-10 (left as they are).
+/// 3.5e-4, cubicle 3.3e-4, parking-garage 3e-10 (left as they are). Not the planar 1e-3: on the
+/// generated worlds between 1e-3 and 1e-2 refining saved a factorization on 2 of 29, and on
+/// torus3D it left the same factorizations but a final point whose gradient was 20x larger
+/// (relative bound 8.9e-8 against 2.1e-10).
 pub const ROTATION_GATE: f64 = 1e-2;
 
 /// The relative gain below which [`refine_rotations`] stops.
@@ -392,7 +396,7 @@ pub const ROTATION_GAIN: f64 = 1e-6;
 pub const ROTATION_STEPS: usize = 10;
 
 /// The most halvings of a step of [`refine_rotations`] before it stops.
-const ROTATION_HALVINGS: i32 = 8;
+pub const ROTATION_HALVINGS: i32 = 8;
 
 /// The poses of a rank-3 point: R_i = X_iᵀ (X_i the block's rows), t_i its translation row
 /// (0 for the anchor).
