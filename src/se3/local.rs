@@ -722,8 +722,10 @@ pub fn optimize_with(
             .then(|| {
                 let delta = sys.solve(|k| -grad[k]);
                 let gd: f64 = grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
-                // Far outside the bound, the model's curvature is not computed ([`CHORD_FAR`]).
-                (-gd <= CHORD_FAR * CHORD_TAKEN * cost).then(|| {
+                // Far outside the bound (or the stopping rule's, where that is larger: f near
+                // 0), the model's curvature is not computed ([`CHORD_FAR`]).
+                let bound = (CHORD_TAKEN * cost).max(1e-12 * cost + 1e-24 * total_weight);
+                (-gd <= CHORD_FAR * bound).then(|| {
                     let dhd = curvature(problem, &sys, &bases, &lambda, &delta);
                     (delta, -(gd + 0.5 * dhd))
                 })
