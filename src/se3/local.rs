@@ -714,26 +714,26 @@ pub fn optimize_with(
             converged = true;
             break;
         }
-        let negligible = |predicted: f64| predicted <= 1e-12 * cost + 1e-24 * total_weight;
+        // The stopping rule's bound on a predicted decrease.
+        let stop = 1e-12 * cost + 1e-24 * total_weight;
+        let negligible = |predicted: f64| predicted <= stop;
         // The chord step ([`CHORD_AFTER`]): δ = −(the last factorization)⁻¹ g and the decrease
         // the model at x (its own Hessian) predicts along it, taken where that is at most
-        // [`CHORD_TAKEN`]·f; otherwise a new factorization.
+        // [`CHORD_TAKEN`]·f (or negligible, where that is larger: f near 0); otherwise a new
+        // factorization. Far outside that bound the model's curvature is not computed
+        // ([`CHORD_FAR`]).
+        let chord_bound = (CHORD_TAKEN * cost).max(stop);
         let chord = std::mem::take(&mut chord_next)
             .then(|| {
                 let delta = sys.solve(|k| -grad[k]);
                 let gd: f64 = grad.iter().zip(&delta).map(|(a, b)| a * b).sum();
-                // Far outside the bound (or the stopping rule's, where that is larger: f near
-                // 0), the model's curvature is not computed ([`CHORD_FAR`]).
-                let bound = (CHORD_TAKEN * cost).max(1e-12 * cost + 1e-24 * total_weight);
-                (-gd <= CHORD_FAR * bound).then(|| {
+                (-gd <= CHORD_FAR * chord_bound).then(|| {
                     let dhd = curvature(problem, &sys, &bases, &lambda, &delta);
                     (delta, -(gd + 0.5 * dhd))
                 })
             })
             .flatten()
-            .filter(|&(_, predicted)| {
-                predicted >= 0.0 && (predicted <= CHORD_TAKEN * cost || negligible(predicted))
-            });
+            .filter(|&(_, predicted)| predicted >= 0.0 && predicted <= chord_bound);
         let is_chord = chord.is_some();
         let (delta, predicted) = match chord {
             Some(step) => step,

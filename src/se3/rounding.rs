@@ -308,8 +308,9 @@ pub fn refine_rotations(problem: &Problem3, x: &mut Point3) {
     if !worth_it {
         return;
     }
-    // G's scalar factor over the poses but the anchor, in the poses' fill-reducing order.
-    let unknown = |i: usize| (i != anchor).then(|| if i < anchor { i } else { i - 1 });
+    // G's scalar factor over the poses but the anchor (numbered as their translation rows), in
+    // the poses' fill-reducing order.
+    let unknown = |i: usize| problem.position_row(i);
     // A self-loop turns both ends alike: nothing in G.
     let edges: Vec<_> = problem.terms.iter().filter(|t| t.i != t.j).collect();
     let (entries, values) = anchored_laplacian(
