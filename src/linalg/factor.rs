@@ -1433,6 +1433,13 @@ pub fn pose_rank(
     rank
 }
 
+/// AMD's rank of each pose of the pose graph (`n` nodes, `edges`), the identity where AMD fails:
+/// [`pose_rank`] without its nested dissection, for a factorization too cheap to pay for METIS
+/// (the 3D chordal relaxation's, [`crate::se3::rounding::chordal`]).
+pub fn amd_pose_rank(n: usize, edges: impl Iterator<Item = (usize, usize)>) -> Vec<usize> {
+    amd_rank(pose_graph(n, edges).as_ref()).map_or_else(|| (0..n).collect(), |(rank, _)| rank)
+}
+
 /// The pattern of the pose graph's matrix (`n` nodes, `edges`): its upper triangle, the diagonal
 /// included, each edge once, rows sorted in each column. Bucketed by column (a counting sort),
 /// each column's rows then sorted and repeated edges merged: the pattern alone, without an

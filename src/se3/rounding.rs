@@ -8,7 +8,8 @@
 
 use super::problem::{Point3, Problem3};
 use super::stiefel::nearest_rotation;
-use crate::linalg::factor::{SparseFactor, column_buckets};
+use crate::linalg::block_system::BlockSystem;
+use crate::linalg::factor::{amd_pose_rank, group_ordering};
 use crate::linalg::laplacian::{anchored_laplacian, anchored_llt};
 
 /// A pose as a rotation matrix (row-major) and a translation.
@@ -82,6 +83,16 @@ pub fn round_to_rank3(problem: &Problem3, x: &Point3) -> Point3 {
 /// The chordal initialization at rank 3: min Σ κ‖Y_j − Y_i R̃‖_F² over unconstrained 3x3
 /// blocks with the anchor's fixed at I, each block then projected onto SO(3); translations 0
 /// (the local solver projects them).
+///
+/// Its normal equations (one matrix, three right-hand sides: the rows of the Y's) have a 3x3
+/// block per pair of poses: they are assembled as blocks ([`BlockSystem`]) in the AMD order of
+/// the pose graph ([`amd_pose_rank`]) and factored by our own supernodal LLᵀ on this thread (the
+/// second core builds the Newton system meanwhile). Against faer's AMD on the 3(n − 1) rows and
+/// its factorization (whole process, 11 interleaved pairs): tinyGrid3D 0.90, cubicle 0.96,
+/// smallGrid3D and parking-garage 0.98, sphere_bignoise_vertex3 0.98, sphere2500 and torus3D
+/// 1.00; the relaxation alone (in process, medians of 9) torus3D 33 → 27 ms, cubicle 47 → 38,
+/// sphere_bignoise 28 → 17. Not [`Problem3::pose_order`]: its nested dissection waits for METIS
+/// (torus3D 17-22 ms) and factored this 3x3-block matrix no faster than AMD's order.
 pub fn chordal(problem: &Problem3) -> Point3 {
     let n = problem.n;
     let dim = problem.dim();
@@ -108,16 +119,12 @@ pub fn chordal(problem: &Problem3) -> Point3 {
     let m = 3 * (n - 1);
     // The matrix, pose pair by pose pair: a 3x3 block for each pair u < v of the graph (Problem3's
     // pairs, sorted) and the upper triangle of each pose's own block, summed term by term in the
-    // terms' order; its CSC built from them directly. (Listed entry by entry and sorted by an
-    // assembly, with 10 MB of arrays, it took 7 of the relaxation's 25 ms on torus3D; built from
-    // the blocks, the relaxation takes 3 ms less.) The same pattern, entry for entry, and the
-    // same sums in the same order as that assembly: the same bits.
+    // terms' order, then handed to the block system as they are. (Listed entry by entry and
+    // sorted by an assembly, with 10 MB of arrays, it took 7 of the relaxation's 25 ms on
+    // torus3D.)
     let others = &problem.pairs[n..];
     let mut off = vec![[[0.0f64; 3]; 3]; others.len()];
     let mut own = vec![[[0.0f64; 3]; 3]; n];
-    // Whether a pose's block has entries off its diagonal: those of its edges' tails (and
-    // self-loops), whatever their values.
-    let mut full = vec![false; n];
     let mut rhs = vec![0.0; m * 3];
     // Adds v at the symmetric entry (pose r.0, row r.1) × (pose c.0, row c.1) of the rotation
     // Laplacian (once per unordered pair; the diagonal once); `pair` indexes the block of the
@@ -150,7 +157,6 @@ pub fn chordal(problem: &Problem3) -> Point3 {
                 .binary_search(&(t.i.min(t.j), t.i.max(t.j)))
                 .expect("a term's pair of poses is one of the problem's pairs")
         };
-        full[t.i] = true;
         for b in 0..3 {
             add((t.j, b), (t.j, b), t.kappa, pair);
         }
@@ -167,37 +173,44 @@ pub fn chordal(problem: &Problem3) -> Point3 {
             }
         }
     }
-    // The pairs by their second pose, first poses ascending within each (the pairs are sorted).
-    let (by_second, second) = column_buckets(n, others.iter().map(|&(_, v)| v));
-    let mut col_ptr = Vec::with_capacity(m + 1);
-    let mut row_idx = Vec::new();
-    let mut vals = Vec::new();
-    col_ptr.push(0);
-    for v in (0..n).filter(|&v| v != anchor) {
-        for b in 0..3 {
-            for &k in &second[by_second[v]..by_second[v + 1]] {
-                let u = others[k].0;
-                if let Some(first) = unknown(u, 0) {
-                    for a in 0..3 {
-                        row_idx.push(first + a);
-                        vals.push(off[k][a][b]);
-                    }
+    // The blocks of the unknown poses (numbered as their unknowns, 3 coordinates each): every
+    // pose's own (upper triangle; off its diagonal only where an edge's tail or a self-loop put
+    // something, else zeros), then the pairs of the graph without the anchor, in their order.
+    let block = |i: usize| unknown(i, 0).map(|first| first / 3);
+    let pairs: Vec<(usize, usize, usize)> = others
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &(u, v))| Some((block(u)?, block(v)?, k)))
+        .collect();
+    let blocks: Vec<(usize, usize)> = (0..n - 1)
+        .map(|b| (b, b))
+        .chain(pairs.iter().map(|&(a, b, _)| (a, b)))
+        .collect();
+    let order: Vec<usize> = group_ordering(
+        &amd_pose_rank(n, problem.terms.iter().map(|t| (t.i, t.j))),
+        &(0..n).collect::<Vec<_>>(),
+    )
+    .into_iter()
+    .filter_map(block)
+    .collect();
+    let mut system = BlockSystem::new(&vec![3; n - 1], &blocks, &order, f64::INFINITY, |_, _| {});
+    system.fill_with(|fill| {
+        for v in (0..n).filter(|&v| v != anchor) {
+            for a in 0..3 {
+                for b in a..3 {
+                    fill.push(own[v][a][b]);
                 }
             }
-            let first = unknown(v, 0).expect("not the anchor");
-            for a in if full[v] { 0..b + 1 } else { b..b + 1 } {
-                row_idx.push(first + a);
-                vals.push(own[v][a][b]);
-            }
-            col_ptr.push(row_idx.len());
         }
-    }
-    let matrix = faer::sparse::SparseColMat::new(
-        faer::sparse::SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx),
-        vals,
-    );
-    let mut factor = SparseFactor::<f64>::analyze(matrix.symbolic());
-    if factor.llt(matrix.as_ref()).is_err() {
+        for &(_, _, k) in &pairs {
+            for a in 0..3 {
+                for b in 0..3 {
+                    fill.push(off[k][a][b]);
+                }
+            }
+        }
+    });
+    if system.llt().is_err() {
         // Not connected enough for the relaxation: start from the identity.
         for i in 0..n {
             for a in 0..3 {
@@ -206,7 +219,10 @@ pub fn chordal(problem: &Problem3) -> Point3 {
         }
         return x;
     }
-    factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, 3));
+    for column in rhs.chunks_exact_mut(m) {
+        let y = system.solve(|k| column[k]);
+        column.copy_from_slice(&y);
+    }
     for i in (0..n).filter(|&i| i != anchor) {
         let mut block = [0.0; 9];
         for a in 0..3 {
