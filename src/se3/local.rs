@@ -742,16 +742,27 @@ pub fn optimize_with(
                     (values, _) = hessian(problem, &sys, &x, &qx, &bases);
                     assembled = true;
                 }
-                // (H + μ D) δ = −g, D = max(|diag H|, floor).
+                // (H + μ D) δ = −g, D = max(|diag H|, floor), written into the system as the
+                // values are handed over (the diagonal's value indices ascend with the
+                // coordinates), without a damped copy of them (torus3D: 4 MB a step).
                 let dmax = sys
                     .diagonal
                     .iter()
                     .fold(0.0f64, |m, &k| m.max(values[k].abs()));
-                let mut damped = values.clone();
-                for &k in &sys.diagonal {
-                    damped[k] += mu * values[k].abs().max(1e-12 * dmax);
-                }
-                sys.system.fill(&damped);
+                let floor = 1e-12 * dmax;
+                let System {
+                    system, diagonal, ..
+                } = &mut sys;
+                system.fill_with(|fill| {
+                    let mut diagonal = diagonal.iter().copied().peekable();
+                    for (k, &v) in values.iter().enumerate() {
+                        fill.push(match diagonal.next_if_eq(&k) {
+                            Some(_) => v + mu * v.abs().max(floor),
+                            None => v,
+                        });
+                    }
+                    debug_assert!(diagonal.next().is_none(), "the diagonal's indices ascend");
+                });
                 work += sys.system.multiply_adds();
                 if first_factorization {
                     first_factorization = false;
