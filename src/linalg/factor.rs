@@ -2464,6 +2464,43 @@ mod tests {
         }
     }
 
+    /// [`amd_pose_rank`] on trees (random parents, the edges in random directions and order):
+    /// a permutation whose elimination makes no fill, as eliminating a leaf never does and a tree
+    /// always has one of degree 1 (minimum degree's pick): every column holds its diagonal and,
+    /// but the last one's, its parent's row, so Σ c_j² = 4(n − 1) + 1 (by hand), against the
+    /// dense elimination ([`dense_elimination_work`]).
+    #[test]
+    fn amd_orders_a_tree_without_fill() {
+        let mut rng = crate::linalg::rng::Rng::new(53);
+        for n in [1, 2, 3, 10, 57, 300] {
+            let mut edges: Vec<(usize, usize)> = (1..n)
+                .map(|k| {
+                    let parent = (rng.next_u64() % k as u64) as usize;
+                    if rng.next_u64().is_multiple_of(2) {
+                        (k, parent)
+                    } else {
+                        (parent, k)
+                    }
+                })
+                .collect();
+            for k in (1..edges.len()).rev() {
+                edges.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+            }
+            let rank = amd_pose_rank(n, edges.iter().copied());
+            let mut seen = vec![false; n];
+            for &r in &rank {
+                assert!(r < n && !seen[r], "n = {n}: not a permutation");
+                seen[r] = true;
+            }
+            let expected = (4 * (n - 1) + 1) as f64;
+            assert_eq!(
+                dense_elimination_work(n, &edges, &rank),
+                expected,
+                "n = {n}"
+            );
+        }
+    }
+
     /// The pose graph's pattern is the one an [`Assembly`] of its entries builds (its general
     /// bucketing, with slots): random graphs with repeated and reversed edges and self-loops.
     #[test]
