@@ -813,7 +813,7 @@ mod tests {
     #[test]
     fn the_blocked_assembly_is_the_entrywise_one() {
         for (seed, anchor) in [(1, 0), (2, 13), (3, 26)] {
-            let problem = crate::se3::grid_problem(seed, anchor);
+            let problem = crate::se3::grid_problem(seed, anchor, 0.05);
             let mut certifier = Certifier3::new(&problem);
             let entries = problem.upper();
             let pattern: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();

@@ -915,7 +915,7 @@ mod tests {
     /// St(3, p)^n × ℝ^{p(n−1)}.
     #[test]
     fn hessian_values_are_the_formula_bit_for_bit() {
-        let problem = grid(3, 0);
+        let problem = grid(3, 0, 0.05);
         let mut rng = Rng::new(11);
         for p in [3, 4, 5, 6, 7, 9] {
             let (x, qx, bases) = random_point(&problem, p, &mut rng);
@@ -936,7 +936,7 @@ mod tests {
     /// points and directions of ranks 3 to 5, to rounding.
     #[test]
     fn the_curvature_without_the_hessian_is_the_assembled_one() {
-        let problem = grid(5, 4);
+        let problem = grid(5, 4, 0.05);
         let mut rng = Rng::new(17);
         for p in [3, 4, 5] {
             let (x, qx, bases) = random_point(&problem, p, &mut rng);

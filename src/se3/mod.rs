@@ -528,10 +528,10 @@ pub fn rt_of(pose: &crate::graph3::Pose3) -> Rt {
     }
 }
 
-/// The problem of a noisy 27-pose grid world (seed `seed`), anchored at pose `anchor`: for the
-/// tests of the modules that take a [`Problem3`].
+/// The problem of a noisy 27-pose grid world (seed `seed`, rotation noise `sigma`), anchored at
+/// pose `anchor`: for the tests of the modules that take a [`Problem3`].
 #[cfg(test)]
-pub(crate) fn grid_problem(seed: u64, anchor: usize) -> Problem3 {
+pub(crate) fn grid_problem(seed: u64, anchor: usize, sigma: f64) -> Problem3 {
     use crate::simulate::space::{SpaceConfig, World3, simulate3};
     use crate::simulate::{RotationNoise, TranslationNoise};
     let graph = simulate3(&SpaceConfig {
@@ -539,7 +539,7 @@ pub(crate) fn grid_problem(seed: u64, anchor: usize) -> Problem3 {
         n: 27,
         side: 6.0,
         loop_probability: 0.3,
-        rotation_noise: RotationNoise::Gaussian { sigma: 0.05 },
+        rotation_noise: RotationNoise::Gaussian { sigma },
         translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
         seed,
     })

@@ -421,13 +421,8 @@ pub fn poses_of(problem: &Problem3, x: &Point3) -> Vec<Rt> {
     assert_eq!(x.p, 3);
     (0..problem.n)
         .map(|i| {
-            let mut r = [0.0; 9];
-            for a in 0..3 {
-                for c in 0..3 {
-                    // R[c][a] = X_i[a][c].
-                    r[c * 3 + a] = x.x[problem.rotation_row(i, a) * 3 + c];
-                }
-            }
+            let rotation = rotation_of(problem, x, i);
+            let r = std::array::from_fn(|k| rotation[k / 3][k % 3]);
             let t = problem
                 .position_row(i)
                 .map_or([0.0; 3], |k| [x.x[k * 3], x.x[k * 3 + 1], x.x[k * 3 + 2]]);
@@ -653,18 +648,7 @@ mod tests {
     /// quotient, coordinate by coordinate, at the chordal start of a noisy grid.
     #[test]
     fn the_rotation_costs_gradient_is_its_difference_quotient() {
-        let graph = simulate3(&SpaceConfig {
-            world: World3::Grid,
-            n: 27,
-            side: 6.0,
-            loop_probability: 0.3,
-            rotation_noise: RotationNoise::Gaussian { sigma: 0.3 },
-            translation_noise: TranslationNoise::Gaussian { sigma: 0.05 },
-            seed: 7,
-        })
-        .graph;
-        let weights = weights3(&graph, false).unwrap();
-        let problem = Problem3::new(&graph, &weights, 0);
+        let problem = crate::se3::grid_problem(7, 0, 0.3);
         let x = chordal(&problem);
         let rotations: Vec<_> = (0..problem.n)
             .map(|i| rotation_of(&problem, &x, i))
