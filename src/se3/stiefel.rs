@@ -198,11 +198,20 @@ mod tests {
         (0..3 * p).map(|k| q[(k / p, k % p)]).collect()
     }
 
+    /// The largest entry of |a − b|.
+    fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
     /// Björck and Bowie's iteration from blocks A near St(3, p) (X + V for a random V of size
     /// 10⁻⁸ to 0.2, as retractions meet them) gives the factor Q that characterizes the polar
-    /// one, rows orthonormal to (p + 3)ε and AQᵀ symmetric to 4ε, the SVD's U Vᵀ to 5·10⁻¹⁴
-    /// (which the SVD's vectors of clustered singular values hold to no better); from blocks far from it (random Gaussian ones) it does not start,
-    /// and `polar_rows` gives the SVD's factor by the eigenvectors instead.
+    /// one, rows orthonormal to (p + 3)ε and AQᵀ symmetric to 4ε, and the SVD's U Vᵀ to
+    /// 5·10⁻¹⁴ (which the SVD's vectors of clustered singular values hold to no better); from
+    /// blocks far from it (random Gaussian ones) it does not start, and `polar_rows` gives the
+    /// SVD's factor by the eigenvectors instead.
     #[test]
     fn the_polar_factor_is_the_svds() {
         let mut rng = crate::linalg::rng::Rng::new(5);
@@ -215,11 +224,7 @@ mod tests {
                 let expected = polar_by_svd(&a, p);
                 let mut b = a.clone();
                 assert!(polar_by_iteration(&mut b, p), "p {p} size {size}");
-                let worst = b
-                    .iter()
-                    .zip(&expected)
-                    .map(|(x, y)| (x - y).abs())
-                    .fold(0.0, f64::max);
+                let worst = max_difference(&b, &expected);
                 assert!(worst < 5e-14, "p {p} size {size}: {worst:e}");
                 assert!(gram_deviation(&b, p).0 <= (p + 3) as f64 * f64::EPSILON);
                 // The polar factor Q of A is the Q with orthonormal rows and AQᵀ symmetric
@@ -238,11 +243,7 @@ mod tests {
             assert!(!polar_by_iteration(&mut untouched, p));
             assert_eq!(untouched, far);
             assert!(polar_rows(&mut far, p));
-            let worst = far
-                .iter()
-                .zip(&expected)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
+            let worst = max_difference(&far, &expected);
             assert!(worst < 1e-11, "p {p} far: {worst:e}");
         }
     }
