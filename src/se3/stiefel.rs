@@ -103,8 +103,75 @@ fn polar_by_iteration(a: &mut [f64], p: usize) -> bool {
 }
 
 /// The nearest rotation to a 3x3 matrix (polar factor with the determinant's sign fixed:
-/// U diag(1, 1, det(UVᵀ)) Vᵀ), row-major.
+/// U diag(1, 1, det(UVᵀ)) Vᵀ), row-major: by Newton's iteration where det M is positive and M
+/// far from singular ([`rotation_by_newton`]), else by the SVD.
 pub fn nearest_rotation(m: &[f64; 9]) -> [f64; 9] {
+    rotation_by_newton(m).unwrap_or_else(|| nearest_rotation_by_svd(m))
+}
+
+/// The inverse of a 3x3 matrix (row-major) by its cofactors, and its determinant.
+fn inverse3(x: &[f64; 9]) -> ([f64; 9], f64) {
+    let c = |r: usize, s: usize| x[r * 3 + s];
+    // The cofactor of (r, s), at (s, r) of the adjugate.
+    let cof = |r: usize, s: usize| {
+        let (r1, r2, s1, s2) = ((r + 1) % 3, (r + 2) % 3, (s + 1) % 3, (s + 2) % 3);
+        c(r1, s1) * c(r2, s2) - c(r1, s2) * c(r2, s1)
+    };
+    let det = c(0, 0) * cof(0, 0) + c(0, 1) * cof(0, 1) + c(0, 2) * cof(0, 2);
+    (std::array::from_fn(|k| cof(k % 3, k / 3) / det), det)
+}
+
+/// The Frobenius norm.
+fn frobenius(x: &[f64; 9]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// The smallest det M / (‖M‖_F/√3)³ (1 for a rotation, 0 for a singular M) from which
+/// [`rotation_by_newton`] is used: below it M is near a reflection or a singular matrix, where
+/// the SVD decides the sign and the direction.
+const NEWTON_MIN_DETERMINANT: f64 = 1e-3;
+
+/// The most steps of [`rotation_by_newton`]: with Higham's scaling it settled in 4 or 5 steps
+/// on every chordal block of the public 3D files, in at most 6 on the test's matrices.
+const NEWTON_STEPS: usize = 12;
+
+/// The polar factor of M by Newton's iteration X ← (ζX + (ζX)⁻ᵀ)/2 with Higham's scaling
+/// ζ = (‖X⁻¹‖_F / ‖X‖_F)^{1/2} (Higham, SIAM J. Sci. Stat. Comput. 7, 1986), which converges
+/// quadratically to it from any nonsingular M; where det M > 0 the polar factor is the nearest
+/// rotation. `None` where det M is below [`NEWTON_MIN_DETERMINANT`] of ‖M‖_F³'s scale or the
+/// iteration has not settled (the change of a step within 4ε of X) in [`NEWTON_STEPS`].
+fn rotation_by_newton(m: &[f64; 9]) -> Option<[f64; 9]> {
+    let scale = frobenius(m) / 3f64.sqrt();
+    let (_, det) = inverse3(m);
+    if !(det > NEWTON_MIN_DETERMINANT * scale * scale * scale && det.is_finite()) {
+        return None;
+    }
+    let mut x = *m;
+    for _ in 0..NEWTON_STEPS {
+        let (inverse, det) = inverse3(&x);
+        if !(det > 0.0 && det.is_finite()) {
+            return None;
+        }
+        let zeta = (frobenius(&inverse) / frobenius(&x)).sqrt();
+        // (ζX + X⁻ᵀ/ζ)/2: X⁻ᵀ's entry (r, s) is X⁻¹'s (s, r).
+        let next: [f64; 9] =
+            std::array::from_fn(|k| (zeta * x[k] + inverse[(k % 3) * 3 + k / 3] / zeta) / 2.0);
+        let change = next
+            .iter()
+            .zip(&x)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        x = next;
+        if change <= 4.0 * f64::EPSILON * frobenius(&x) {
+            return Some(x);
+        }
+    }
+    None
+}
+
+/// [`nearest_rotation`] by nalgebra's SVD.
+fn nearest_rotation_by_svd(m: &[f64; 9]) -> [f64; 9] {
     let a = nalgebra::Matrix3::from_row_slice(m);
     let svd = a.svd(true, true);
     let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
@@ -245,6 +312,61 @@ mod tests {
             assert!(polar_rows(&mut far, p));
             let worst = max_difference(&far, &expected);
             assert!(worst < 1e-11, "p {p} far: {worst:e}");
+        }
+    }
+
+    /// A rotation row-major: Rᵀ R = I to 4ε and det R = 1 to 8ε.
+    fn assert_rotation(r: &[f64; 9], what: &str) {
+        for a in 0..3 {
+            for b in 0..3 {
+                let d: f64 = (0..3).map(|k| r[k * 3 + a] * r[k * 3 + b]).sum();
+                let want = if a == b { 1.0 } else { 0.0 };
+                assert!((d - want).abs() <= 4.0 * f64::EPSILON, "{what}: RᵀR {d}");
+            }
+        }
+        let det = inverse3(r).1;
+        assert!((det - 1.0).abs() <= 8.0 * f64::EPSILON, "{what}: det {det}");
+    }
+
+    /// Newton's iteration gives the SVD's nearest rotation to 2·10⁻¹³, and a rotation, on
+    /// rotations scaled along their axes by 1, 1 to 2 and 1 or 10, exact or perturbed (10⁻⁶,
+    /// 0.1); it does not start where the third scale is 10³ (det M / (‖M‖_F/√3)³ near 10⁻⁵), for
+    /// a reflection or a singular M, and there `nearest_rotation` is the SVD's bit for bit.
+    #[test]
+    fn the_nearest_rotation_is_the_svds() {
+        let mut rng = crate::linalg::rng::Rng::new(11);
+        for trial in 0..400 {
+            // Q diag(s) plus noise, Q a random rotation (a polar factor of a Gaussian block).
+            let q = block(3, 1000 + trial);
+            let q: [f64; 9] = std::array::from_fn(|k| q[k]);
+            let q = nearest_rotation_by_svd(&q);
+            let spread = [1.0, 10.0, 1e3][trial as usize % 3];
+            let s = [1.0, 1.0 + rng.normal().abs(), spread];
+            let noise = [0.0, 1e-6, 0.1][(trial as usize / 3) % 3];
+            let m: [f64; 9] = std::array::from_fn(|k| q[k] * s[k % 3] + noise * rng.normal());
+            let expected = nearest_rotation_by_svd(&m);
+            match rotation_by_newton(&m) {
+                Some(r) => {
+                    assert_rotation(&r, &format!("trial {trial}"));
+                    let worst = max_difference(&r, &expected);
+                    assert!(worst < 2e-13, "trial {trial}: {worst:e}");
+                }
+                None => assert!(spread == 1e3, "trial {trial} refused"),
+            }
+            // det M / (‖M‖_F/√3)³ about 10⁻⁵: left to the SVD.
+            if spread == 1e3 {
+                assert!(rotation_by_newton(&m).is_none(), "trial {trial}");
+            }
+            // A reflection, and a singular matrix: the SVD's answer.
+            let reflected: [f64; 9] =
+                std::array::from_fn(|k| if k / 3 == 2 { -m[k] } else { m[k] });
+            assert!(rotation_by_newton(&reflected).is_none());
+            assert_eq!(
+                nearest_rotation(&reflected),
+                nearest_rotation_by_svd(&reflected)
+            );
+            let singular: [f64; 9] = std::array::from_fn(|k| if k % 3 == 2 { 0.0 } else { m[k] });
+            assert!(rotation_by_newton(&singular).is_none());
         }
     }
 
