@@ -70,8 +70,12 @@ const ITERATION_STEPS: usize = 8;
 /// [`ITERATION_START`] of I, it stops once AAᵀ is within (p + 3)ε of I, entrywise; `false` where
 /// it does not start (A untouched) or has not converged in [`ITERATION_STEPS`] steps (A then
 /// holds its last iterate, whose polar factor is A's). A few hundred flops per block at rank 3
-/// against the symmetric eigen-solver's iterations (and its code, cold in a small solve): whole
-/// process, 41 interleaved pairs, smallGrid3D 0.94-0.97 of the time, tinyGrid3D 0.91-0.93.
+/// against the symmetric eigen-solver's iterations. With [`rotation_by_newton`], whole process
+/// against the eigen-solver and the SVD, each binary copied 8 times (4 for the large files) and
+/// copy paired with copy, 25 interleaved rounds (4): tinyGrid3D 0.99, smallGrid3D 0.96-0.98,
+/// parking-garage 0.95, sphere2500 0.93, sphere_bignoise_vertex3 0.95, torus3D 1.00, cubicle
+/// 1.01. (Copies of one binary alone differ by up to 13% on tinyGrid3D, where the kernel holds
+/// their pages: a pair of binaries measured once is not enough for a small file.)
 fn polar_by_iteration(a: &mut [f64], p: usize) -> bool {
     let (mut deviation, mut m) = gram_deviation(a, p);
     // Also where A holds a NaN: the eigen-solver's path refuses it.
