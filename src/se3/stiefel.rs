@@ -18,11 +18,11 @@
 /// ([`polar_by_iteration`]); farther, or where that has not converged, from the eigenvectors of
 /// AAᵀ.
 pub fn polar_rows(a: &mut [f64], p: usize) -> bool {
-    if polar_by_iteration(a, p) {
-        return true;
-    }
-    let m =
-        nalgebra::Matrix3::from_fn(|r, c| (0..p).map(|k| a[r * p + k] * a[c * p + k]).sum::<f64>());
+    let gram = match polar_by_iteration(a, p) {
+        Ok(()) => return true,
+        Err(gram) => gram,
+    };
+    let m = nalgebra::Matrix3::from_fn(|r, c| gram[r][c]);
     let eig = m.symmetric_eigen();
     if !eig.eigenvalues.iter().all(|&s| s > 0.0 && s.is_finite()) {
         return false;
@@ -67,25 +67,26 @@ const ITERATION_STEPS: usize = 8;
 /// Newton–Schulz iteration), in the rows' form A ← (3I − AAᵀ) A / 2, column by column of A, in
 /// place: each singular value σ of A goes to σ(3 − σ²)/2 (1 − σ to about (3/2)(1 − σ)²) while
 /// the singular vectors stay, so the limit is the polar factor. Started where AAᵀ is within
-/// [`ITERATION_START`] of I, it stops once AAᵀ is within (p + 3)ε of I, entrywise; `false` where
-/// it does not start (A untouched) or has not converged in [`ITERATION_STEPS`] steps (A then
-/// holds its last iterate, whose polar factor is A's). A few hundred flops per block at rank 3
-/// against the symmetric eigen-solver's iterations. With [`rotation_by_newton`], whole process
+/// [`ITERATION_START`] of I, it stops once AAᵀ is within (p + 3)ε of I, entrywise; `Err` with
+/// AAᵀ of A as left where it does not start (A untouched) or has not converged in
+/// [`ITERATION_STEPS`] steps (A then holds its last iterate, whose polar factor is A's), for
+/// [`polar_rows`]'s eigen-solver. A few hundred flops per block at rank 3 against the symmetric
+/// eigen-solver's iterations. With [`rotation_by_newton`], whole process
 /// against the eigen-solver and the SVD, each binary copied 8 times (4 for the large files) and
 /// copy paired with copy, 25 interleaved rounds (4): tinyGrid3D 0.99, smallGrid3D 0.96-0.98,
 /// parking-garage 0.95, sphere2500 0.93, sphere_bignoise_vertex3 0.95, torus3D 1.00, cubicle
 /// 1.01. (Copies of one binary alone differ by up to 13% on tinyGrid3D, where the kernel holds
 /// their pages: a pair of binaries measured once is not enough for a small file.)
-fn polar_by_iteration(a: &mut [f64], p: usize) -> bool {
+fn polar_by_iteration(a: &mut [f64], p: usize) -> Result<(), [[f64; 3]; 3]> {
     let (mut deviation, mut m) = gram_deviation(a, p);
     // Also where A holds a NaN: the eigen-solver's path refuses it.
     if deviation.is_nan() || deviation >= ITERATION_START {
-        return false;
+        return Err(m);
     }
     let tolerance = (p + 3) as f64 * f64::EPSILON;
     for _ in 0..ITERATION_STEPS {
         if deviation <= tolerance {
-            return true;
+            return Ok(());
         }
         // (3I − AAᵀ)A/2 = A − EA with E = (AAᵀ − I)/2, the small correction computed apart
         // (at smallGrid3D's optimum the form T·A, T = (3I − AAᵀ)/2, left a gradient of 10⁻⁵
@@ -103,7 +104,11 @@ fn polar_by_iteration(a: &mut [f64], p: usize) -> bool {
         }
         (deviation, m) = gram_deviation(a, p);
     }
-    deviation <= tolerance
+    if deviation <= tolerance {
+        Ok(())
+    } else {
+        Err(m)
+    }
 }
 
 /// The nearest rotation to a 3x3 matrix (polar factor with the determinant's sign fixed:
@@ -146,14 +151,16 @@ const NEWTON_STEPS: usize = 12;
 /// iteration has not settled (the change of a step within 4ε of X) in [`NEWTON_STEPS`].
 fn rotation_by_newton(m: &[f64; 9]) -> Option<[f64; 9]> {
     let scale = frobenius(m) / 3f64.sqrt();
-    let (_, det) = inverse3(m);
-    if !(det > NEWTON_MIN_DETERMINANT * scale * scale * scale && det.is_finite()) {
-        return None;
-    }
     let mut x = *m;
-    for _ in 0..NEWTON_STEPS {
+    for step in 0..NEWTON_STEPS {
         let (inverse, det) = inverse3(&x);
-        if !(det > 0.0 && det.is_finite()) {
+        // M's own determinant against its scale, then each iterate's sign.
+        let least = if step == 0 {
+            NEWTON_MIN_DETERMINANT * scale * scale * scale
+        } else {
+            0.0
+        };
+        if !(det > least && det.is_finite()) {
             return None;
         }
         let zeta = (frobenius(&inverse) / frobenius(&x)).sqrt();
@@ -294,7 +301,7 @@ mod tests {
                 }
                 let expected = polar_by_svd(&a, p);
                 let mut b = a.clone();
-                assert!(polar_by_iteration(&mut b, p), "p {p} size {size}");
+                assert!(polar_by_iteration(&mut b, p).is_ok(), "p {p} size {size}");
                 let worst = max_difference(&b, &expected);
                 assert!(worst < 5e-14, "p {p} size {size}: {worst:e}");
                 assert!(gram_deviation(&b, p).0 <= (p + 3) as f64 * f64::EPSILON);
@@ -311,7 +318,7 @@ mod tests {
             let mut far: Vec<f64> = (0..3 * p).map(|_| rng.normal()).collect();
             let expected = polar_by_svd(&far, p);
             let mut untouched = far.clone();
-            assert!(!polar_by_iteration(&mut untouched, p));
+            assert!(polar_by_iteration(&mut untouched, p).is_err());
             assert_eq!(untouched, far);
             assert!(polar_rows(&mut far, p));
             let worst = max_difference(&far, &expected);
