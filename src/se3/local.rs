@@ -83,6 +83,36 @@ fn apply_q_at<const P: usize>(problem: &Problem3, x: &Point3) -> Vec<f64> {
     out
 }
 
+/// The translation rows of QX at X's translations zeroed, VY (the translations' rows of Q by the
+/// rotation rows' columns times Y), handed to `add(row, column, value)` product by product: the
+/// terms of [`apply_q`]'s sums for those rows, in its order, without its products by the zeroed
+/// translations and its rotation rows (which the projection does not read: 6 of Q's 16 entries
+/// per pair of poses).
+fn translation_rows_of_qy(problem: &Problem3, x: &Point3, mut add: impl FnMut(usize, usize, f64)) {
+    let p = x.p;
+    for (k, &(u, v)) in problem.pairs.iter().enumerate() {
+        let b = &problem.blocks[k];
+        // Row t_u by the rotation rows of v; for u ≠ v, row t_v by those of u (Q's symmetry).
+        for (to, from, q) in [(u, v, b[0]), (v, u, [b[0][0], b[1][0], b[2][0], b[3][0]])] {
+            let Some(r) = problem.position_row(to) else {
+                continue;
+            };
+            for l in 1..4 {
+                if q[l] == 0.0 {
+                    continue;
+                }
+                let row = x.row(problem.rotation_row(from, l - 1));
+                for c in 0..p {
+                    add(r, c, q[l] * row[c]);
+                }
+            }
+            if u == v {
+                break;
+            }
+        }
+    }
+}
+
 /// The Cholesky factor of the anchored τ-Laplacian, for the optimal translations.
 pub struct Translations {
     factor: Option<SparseFactor<f64>>,
@@ -114,15 +144,9 @@ impl Translations {
             return;
         };
         let (m, p) = (problem.n - 1, x.p);
-        x.x[..m * p].fill(0.0);
-        let qx = apply_q(problem, x);
         // Column-major right-hand sides −(V Y).
         let mut rhs = vec![0.0; m * p];
-        for r in 0..m {
-            for c in 0..p {
-                rhs[c * m + r] = -qx[r * p + c];
-            }
-        }
+        translation_rows_of_qy(problem, x, |r, c, v| rhs[c * m + r] -= v);
         factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, p));
         for r in 0..m {
             for c in 0..p {
