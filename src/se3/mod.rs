@@ -8,8 +8,8 @@
 //! - [`local`]: Riemannian Newton (damped, one symbolic factorization per rank, the
 //!   translations projected out: variable projection), SE-Sync's Algorithm 2's local step;
 //! - [`rounding`]: chordal initialization (its rotations refined by Gauss-Newton on the rotation
-//!   cost where they are visibly off its minimum), the rank-3 rounding with the determinant's sign
-//!   fixed;
+//!   cost where they are visibly off its minimum, then on the whole cost with the translations
+//!   projected), the rank-3 rounding with the determinant's sign fixed;
 //! - [`certificate`]: S = Q − SymBlockDiag(Λ) proven PSD (LDLᵀ inertia with a-posteriori backward
 //!   error, Lehmann-Maehly/Temple for the three deflated directions), the lower bound and gap;
 //! - this file: the Riemannian staircase (SE-Sync's Algorithm 1): Newton at rank 3 from the
@@ -37,7 +37,9 @@ use crate::linalg::heap::Room;
 use certificate::{Bound3, Certifier3};
 use local::{LocalOptions, Step3, System, Translations, optimize, optimize_with};
 use problem::{Point3, Problem3, Weight3};
-use rounding::{Rt, chordal, point_of, poses_of, refine_rotations, round_to_rank3};
+use rounding::{
+    Rt, chordal, point_of, poses_of, refine_projected, refine_rotations, round_to_rank3,
+};
 
 /// Options of [`solve_graph3`].
 #[derive(Debug, Clone, Copy)]
@@ -189,16 +191,19 @@ fn solve_problem(
                    system: &dyn Fn() -> Option<System>,
                    room: &dyn Fn() -> Vec<f64>,
                    report: &mut dyn FnMut(Step3)| {
-        let start = match start {
-            Some(poses) => point_of(&problem, poses),
+        let (mut start, chordal_start) = match start {
+            Some(poses) => (point_of(&problem, poses), false),
             None => {
                 crate::progress::phase("chordal initialization");
                 let mut x = chordal(&problem);
                 refine_rotations(&problem, &mut x);
-                x
+                (x, true)
             }
         };
         let mut translations = translations();
+        if chordal_start {
+            refine_projected(&problem, &mut translations, &mut start);
+        }
         crate::progress::phase("Riemannian Newton, rank 3");
         let first = optimize_with(
             &problem,
