@@ -825,7 +825,19 @@ pub fn optimize_with(
         });
         let negligible = negligible(predicted);
         if negligible && (actual.is_nan() || actual <= 0.0) {
-            // Converged: no step predicts a decrease above the rounding of f.
+            // Converged: no step predicts a decrease above the rounding of f. Where f cannot
+            // tell the trial point from x (within the rounding the stopping rule allows) but
+            // its gradient is smaller, the trial point is the better first-order point, and the
+            // certificate's bound, which grows with the gradient, is tighter there.
+            if actual.is_finite() && -actual <= stop {
+                let qx = apply_q(problem, &trial);
+                let trial_bases = pose_bases(problem, &trial);
+                let g = gradient(problem, &sys, p, &qx, &trial_bases);
+                let norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
+                if norm < gradient_norm {
+                    (x, cost, gradient_norm) = (trial, trial_cost, norm);
+                }
+            }
             converged = true;
             break;
         }
