@@ -125,6 +125,8 @@ pub struct Problem3 {
     pub max_degree: usize,
     /// A fill-reducing rank of each pose ([`Problem3::pose_rank`]), computed at its first use.
     pose_rank: std::sync::OnceLock<Vec<usize>>,
+    /// AMD's rank of each pose ([`Problem3::amd_pose_rank`]), computed at its first use.
+    amd_rank: std::sync::OnceLock<Vec<usize>>,
 }
 
 /// A point of the rank-p form: N rows of p entries, row-major.
@@ -278,7 +280,18 @@ impl Problem3 {
             abs_blocks,
             max_degree: degree.iter().copied().max().unwrap_or(0),
             pose_rank: std::sync::OnceLock::new(),
+            amd_rank: std::sync::OnceLock::new(),
         }
+    }
+
+    /// AMD's rank of each pose of the pose graph ([`crate::linalg::factor::amd_pose_rank`]), for
+    /// the factorizations of the start too cheap to wait for [`Problem3::pose_rank`]'s nested
+    /// dissection (the chordal relaxation's and the projected refinement's, with 3 and 1 rows a
+    /// pose): computed once, at the first call.
+    pub fn amd_pose_rank(&self) -> &[usize] {
+        self.amd_rank.get_or_init(|| {
+            crate::linalg::factor::amd_pose_rank(self.n, self.terms.iter().map(|t| (t.i, t.j)))
+        })
     }
 
     /// A fill-reducing rank of each pose ([`crate::linalg::factor::pose_rank`]), for the Newton

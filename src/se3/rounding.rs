@@ -10,7 +10,7 @@ use super::local::Translations;
 use super::problem::{Point3, Problem3};
 use super::stiefel::nearest_rotation;
 use crate::linalg::block_system::BlockSystem;
-use crate::linalg::factor::{amd_pose_rank, group_ordering};
+use crate::linalg::factor::group_ordering;
 use crate::linalg::laplacian::{anchored_laplacian, anchored_llt};
 
 /// A pose as a rotation matrix (row-major) and a translation.
@@ -87,8 +87,8 @@ pub fn round_to_rank3(problem: &Problem3, x: &Point3) -> Point3 {
 ///
 /// Its normal equations (one matrix, three right-hand sides: the rows of the Y's) have a 3x3
 /// block per pair of poses: they are assembled as blocks ([`BlockSystem`]) in the AMD order of
-/// the pose graph ([`amd_pose_rank`]) and factored by our own supernodal LLᵀ on this thread (the
-/// second core builds the Newton system meanwhile). Against faer's AMD on the 3(n − 1) rows and
+/// the pose graph ([`Problem3::amd_pose_rank`]) and factored by our own supernodal LLᵀ on this
+/// thread (the second core builds the Newton system meanwhile). Against faer's AMD on the 3(n − 1) rows and
 /// its factorization (whole process, 11 interleaved pairs): tinyGrid3D 0.90, cubicle 0.96,
 /// smallGrid3D and parking-garage 0.98, sphere_bignoise_vertex3 0.98, sphere2500 and torus3D
 /// 1.00; the relaxation alone (in process, medians of 9) torus3D 33 → 27 ms, cubicle 47 → 38,
@@ -187,13 +187,10 @@ pub fn chordal(problem: &Problem3) -> Point3 {
         .map(|b| (b, b))
         .chain(pairs.iter().map(|&(a, b, _)| (a, b)))
         .collect();
-    let order: Vec<usize> = group_ordering(
-        &amd_pose_rank(n, problem.terms.iter().map(|t| (t.i, t.j))),
-        &(0..n).collect::<Vec<_>>(),
-    )
-    .into_iter()
-    .filter_map(block)
-    .collect();
+    let order: Vec<usize> = group_ordering(problem.amd_pose_rank(), &(0..n).collect::<Vec<_>>())
+        .into_iter()
+        .filter_map(block)
+        .collect();
     let mut system = BlockSystem::new(&vec![3; n - 1], &blocks, &order, f64::INFINITY, |_, _| {});
     system.fill_with(|fill| {
         for v in (0..n).filter(|&v| v != anchor) {
@@ -487,11 +484,10 @@ fn refine_projected_with(
             values.push(2.0 * t.tau * t.t.iter().map(|c| c * c).sum::<f64>());
         }
     }
-    // AMD's order of the pose graph, as the chordal relaxation's (the problem's own order may
-    // still be computed on the second core, nested dissection by METIS: torus3D and cubicle waited
-    // 6-7 ms for it here).
-    let rank = amd_pose_rank(n, edges.iter().map(|t| (t.i, t.j)));
-    let order: Vec<usize> = group_ordering(&rank, &(0..n).collect::<Vec<_>>())
+    // AMD's order of the pose graph, the chordal relaxation's (the problem's own order may still
+    // be computed on the second core, nested dissection by METIS: torus3D and cubicle waited 6-7
+    // ms for it here).
+    let order: Vec<usize> = group_ordering(problem.amd_pose_rank(), &(0..n).collect::<Vec<_>>())
         .into_iter()
         .filter_map(unknown)
         .collect();
