@@ -810,6 +810,41 @@ mod tests {
         assert_eq!(x.x, refined);
     }
 
+    /// Holds `gradient` (in world-frame turns R_i ← Exp(δ) R_i) against the central difference
+    /// quotient of `cost` over the rotations, axis by axis at the given poses, to `tolerance`
+    /// relative.
+    fn assert_turn_gradient(
+        rotations: &[[[f64; 3]; 3]],
+        gradient: &[[f64; 3]],
+        poses: &[usize],
+        tolerance: f64,
+        cost: impl Fn(&[[[f64; 3]; 3]]) -> f64,
+    ) {
+        let h = 1e-6;
+        for &i in poses {
+            for k in 0..3 {
+                let turned = |s: f64| {
+                    let mut axis = [0.0; 3];
+                    axis[k] = s;
+                    let mut r = rotations.to_vec();
+                    let m = nalgebra::Rotation3::new(nalgebra::Vector3::from(axis));
+                    r[i] = std::array::from_fn(|a| {
+                        std::array::from_fn(|c| {
+                            (0..3).map(|l| m[(a, l)] * rotations[i][l][c]).sum()
+                        })
+                    });
+                    cost(&r)
+                };
+                let quotient = (turned(h) - turned(-h)) / (2.0 * h);
+                assert!(
+                    (quotient - gradient[i][k]).abs() < tolerance * (1.0 + gradient[i][k].abs()),
+                    "pose {i} axis {k}: {quotient} against {}",
+                    gradient[i][k]
+                );
+            }
+        }
+    }
+
     /// The gradient of the rotation cost in world-frame turns is its central difference
     /// quotient, coordinate by coordinate, at the chordal start of a noisy grid.
     #[test]
@@ -820,29 +855,9 @@ mod tests {
             .map(|i| rotation_of(&problem, &x, i))
             .collect();
         let (_, gradient) = rotation_cost(&problem, &rotations);
-        let h = 1e-6;
-        for i in [1, 13, 26] {
-            for k in 0..3 {
-                let turned = |s: f64| {
-                    let mut axis = [0.0; 3];
-                    axis[k] = s;
-                    let mut r = rotations.clone();
-                    let m = nalgebra::Rotation3::new(nalgebra::Vector3::from(axis));
-                    r[i] = std::array::from_fn(|a| {
-                        std::array::from_fn(|c| {
-                            (0..3).map(|l| m[(a, l)] * rotations[i][l][c]).sum()
-                        })
-                    });
-                    rotation_cost(&problem, &r).0
-                };
-                let quotient = (turned(h) - turned(-h)) / (2.0 * h);
-                assert!(
-                    (quotient - gradient[i][k]).abs() < 1e-6 * (1.0 + gradient[i][k].abs()),
-                    "pose {i} axis {k}: {quotient} against {}",
-                    gradient[i][k]
-                );
-            }
-        }
+        assert_turn_gradient(&rotations, &gradient, &[1, 13, 26], 1e-6, |r| {
+            rotation_cost(&problem, r).0
+        });
     }
 
     /// The gradient of f in world-frame turns with the translations held (the reduced cost's, at
@@ -857,31 +872,11 @@ mod tests {
             .map(|i| rotation_of(&problem, &x, i))
             .collect();
         let gradient = projected_gradient(&problem, &x, &rotations);
-        let h = 1e-6;
-        for i in [1, 13, 26] {
-            for k in 0..3 {
-                let turned = |s: f64| {
-                    let mut axis = [0.0; 3];
-                    axis[k] = s;
-                    let m = nalgebra::Rotation3::new(nalgebra::Vector3::from(axis));
-                    let mut r = rotations.clone();
-                    r[i] = std::array::from_fn(|a| {
-                        std::array::from_fn(|c| {
-                            (0..3).map(|l| m[(a, l)] * rotations[i][l][c]).sum()
-                        })
-                    });
-                    let mut y = x.clone();
-                    set_rotations(&problem, &mut y, &r);
-                    problem.cost(&y)
-                };
-                let quotient = (turned(h) - turned(-h)) / (2.0 * h);
-                assert!(
-                    (quotient - gradient[i][k]).abs() < 1e-5 * (1.0 + gradient[i][k].abs()),
-                    "pose {i} axis {k}: {quotient} against {}",
-                    gradient[i][k]
-                );
-            }
-        }
+        assert_turn_gradient(&rotations, &gradient, &[1, 13, 26], 1e-5, |r| {
+            let mut y = x.clone();
+            set_rotations(&problem, &mut y, r);
+            problem.cost(&y)
+        });
     }
 
     /// On noisy grids the refinement descends towards the minimum that Newton on the whole
