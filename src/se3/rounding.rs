@@ -88,12 +88,13 @@ pub fn round_to_rank3(problem: &Problem3, x: &Point3) -> Point3 {
 /// Its normal equations (one matrix, three right-hand sides: the rows of the Y's) have a 3x3
 /// block per pair of poses: they are assembled as blocks ([`BlockSystem`]) in the AMD order of
 /// the pose graph ([`Problem3::amd_pose_rank`]) and factored by our own supernodal LLᵀ on this
-/// thread (the second core builds the Newton system meanwhile). Against faer's AMD on the 3(n − 1) rows and
-/// its factorization (whole process, 11 interleaved pairs): tinyGrid3D 0.90, cubicle 0.96,
-/// smallGrid3D and parking-garage 0.98, sphere_bignoise_vertex3 0.98, sphere2500 and torus3D
-/// 1.00; the relaxation alone (in process, medians of 9) torus3D 33 → 27 ms, cubicle 47 → 38,
-/// sphere_bignoise 28 → 17. Not [`Problem3::pose_order`]: its nested dissection waits for METIS
-/// (torus3D 17-22 ms) and factored this 3x3-block matrix no faster than AMD's order.
+/// thread (the second core builds the Newton system meanwhile). Against faer's AMD on the
+/// 3(n − 1) rows and its factorization (whole process, 11 interleaved pairs): tinyGrid3D 0.90,
+/// cubicle 0.96, smallGrid3D and parking-garage 0.98, sphere_bignoise_vertex3 0.98, sphere2500
+/// and torus3D 1.00; the relaxation alone (in process, medians of 9) torus3D 33 → 27 ms,
+/// cubicle 47 → 38, sphere_bignoise 28 → 17. Not [`Problem3::pose_order`]: its nested dissection
+/// waits for METIS (torus3D 17-22 ms) and factored this 3x3-block matrix no faster than AMD's
+/// order.
 pub fn chordal(problem: &Problem3) -> Point3 {
     let n = problem.n;
     let dim = problem.dim();
