@@ -644,6 +644,14 @@ pub struct LocalOptions {
     pub max_iterations: usize,
 }
 
+/// The norm of the Riemannian gradient at `x` (one pass for QX, one for the tangent bases).
+fn gradient_norm_at(problem: &Problem3, sys: &System, x: &Point3) -> f64 {
+    let qx = apply_q(problem, x);
+    let bases = pose_bases(problem, x);
+    let g = gradient(problem, sys, x.p, &qx, &bases);
+    g.iter().map(|g| g * g).sum::<f64>().sqrt()
+}
+
 /// Riemannian Newton (damped) from `x` at its rank, translations projected first.
 pub fn optimize(
     problem: &Problem3,
@@ -830,10 +838,7 @@ pub fn optimize_with(
             // its gradient is smaller, the trial point is the better first-order point, and the
             // certificate's bound, which grows with the gradient, is tighter there.
             if actual.is_finite() && -actual <= stop {
-                let qx = apply_q(problem, &trial);
-                let trial_bases = pose_bases(problem, &trial);
-                let g = gradient(problem, &sys, p, &qx, &trial_bases);
-                let norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
+                let norm = gradient_norm_at(problem, &sys, &trial);
                 if norm < gradient_norm {
                     (x, cost, gradient_norm) = (trial, trial_cost, norm);
                 }
@@ -853,10 +858,7 @@ pub fn optimize_with(
             nu = 2.0;
             if negligible {
                 // One more gradient evaluation for the report.
-                let qx = apply_q(problem, &x);
-                bases = pose_bases(problem, &x);
-                let g = gradient(problem, &sys, p, &qx, &bases);
-                gradient_norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
+                gradient_norm = gradient_norm_at(problem, &sys, &x);
                 converged = true;
                 break;
             }

@@ -191,24 +191,24 @@ fn solve_problem(
                    system: &dyn Fn() -> Option<System>,
                    room: &dyn Fn() -> Vec<f64>,
                    report: &mut dyn FnMut(Step3)| {
-        let (mut start, chordal_start) = match start {
-            Some(poses) => (point_of(&problem, poses), false),
+        let mut point = match start {
+            Some(poses) => point_of(&problem, poses),
             None => {
                 crate::progress::phase("chordal initialization");
                 let mut x = chordal(&problem);
                 refine_rotations(&problem, &mut x);
-                (x, true)
+                x
             }
         };
         let mut translations = translations();
-        if chordal_start {
-            refine_projected(&problem, &mut translations, &mut start);
+        if start.is_none() {
+            refine_projected(&problem, &mut translations, &mut point);
         }
         crate::progress::phase("Riemannian Newton, rank 3");
         let first = optimize_with(
             &problem,
             &mut translations,
-            start,
+            point,
             &local,
             report,
             system,
