@@ -25,7 +25,8 @@
 //! NSS, which a static glibc loads at run time from the shared libraries anyway) or with
 //! `clarabel-sdp` (the system OpenBLAS), cross builds, systems without the static archives
 //! (`cc -print-file-name` does not find them: glibc's static libraries are a separate package
-//! on some distributions), and any build with `PGO_LINK=dynamic` in the environment.
+//! on some distributions), and any build with `PGO_LINK=dynamic` in the environment. A build
+//! with rustc's own `crt-static` is left to rustc.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -46,7 +47,12 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-env-changed=PGO_LINK");
     let var = |name: &str| std::env::var(name).unwrap_or_default();
-    if var("CARGO_CFG_TARGET_OS") != "linux" || var("CARGO_CFG_TARGET_ENV") != "gnu" {
+    // With `crt-static` (RUSTFLAGS and `--target`) rustc links a static PIE itself, which a
+    // position-dependent link would break.
+    let crt_static = var("CARGO_CFG_TARGET_FEATURE")
+        .split(',')
+        .any(|f| f == "crt-static");
+    if var("CARGO_CFG_TARGET_OS") != "linux" || var("CARGO_CFG_TARGET_ENV") != "gnu" || crt_static {
         return;
     }
     println!("cargo:rustc-link-arg-bins=-no-pie");
