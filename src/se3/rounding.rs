@@ -10,7 +10,7 @@ use super::local::Translations;
 use super::problem::{Point3, Problem3};
 use super::stiefel::nearest_rotation;
 use crate::linalg::block_system::BlockSystem;
-use crate::linalg::factor::group_ordering;
+use crate::linalg::factor::{SparseFactor, group_ordering};
 use crate::linalg::laplacian::{anchored_laplacian, anchored_llt};
 
 /// A pose as a rotation matrix (row-major) and a translation.
@@ -248,6 +248,13 @@ fn rotation_of(problem: &Problem3, x: &Point3, i: usize) -> [[f64; 3]; 3] {
     r
 }
 
+/// The translation t_i of a rank-3 point (0 for the anchor).
+fn translation_of(problem: &Problem3, x: &Point3, i: usize) -> [f64; 3] {
+    problem
+        .position_row(i)
+        .map_or([0.0; 3], |k| [x.x[k * 3], x.x[k * 3 + 1], x.x[k * 3 + 2]])
+}
+
 /// The rotation part of f, Σ κ‖R_j − R_i R̃‖_F² = Σ 2κ (3 − tr M) with M = R_i R̃ R_jᵀ, and its
 /// gradient in world-frame turns R_i ← Exp(δ_i) R_i: +2κ w at i and −2κ w at j, w the axial
 /// vector of M − Mᵀ (d tr(Exp(δ) M)/dδ = −w).
@@ -325,33 +332,17 @@ pub fn refine_rotations(problem: &Problem3, x: &mut Point3) {
     }
     // G's scalar factor over the poses but the anchor (numbered as their translation rows), in
     // the poses' fill-reducing order.
-    let unknown = |i: usize| problem.position_row(i);
-    // A self-loop turns both ends alike: nothing in G.
-    let edges: Vec<_> = problem.terms.iter().filter(|t| t.i != t.j).collect();
-    let (entries, values) = anchored_laplacian(
-        edges
-            .iter()
-            .map(|t| (unknown(t.i), unknown(t.j), 4.0 * t.kappa)),
-    );
+    let (entries, values) = rotation_laplacian(problem);
     let order: Vec<usize> = problem
         .pose_order()
         .into_iter()
-        .filter_map(unknown)
+        .filter_map(|i| problem.position_row(i))
         .collect();
     let Some(mut factor) = anchored_llt(n - 1, &order, &entries, &values) else {
         return;
     };
-    let m = n - 1;
     for _ in 0..ROTATION_STEPS {
-        // −∇ in column-major m x 3, solved in place.
-        let mut delta = vec![0.0; 3 * m];
-        for i in (0..n).filter(|&i| i != anchor) {
-            let u = unknown(i).expect("not the anchor");
-            for k in 0..3 {
-                delta[k * m + u] = -gradient[i][k];
-            }
-        }
-        factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut delta, m, 3));
+        let delta = turn_steps(problem, &mut factor, &gradient);
         let Some((trial, (trial_cost, trial_gradient))) = (0..ROTATION_HALVINGS)
             .map(|h| {
                 let trial = turned(problem, &rotations, &delta, 0.5f64.powi(h));
@@ -369,6 +360,42 @@ pub fn refine_rotations(problem: &Problem3, x: &mut Point3) {
         }
     }
     set_rotations(problem, x, &rotations);
+}
+
+/// The rotation part's Gauss-Newton matrix G over the poses but the anchor (numbered as their
+/// translation rows): the 4κ-weighted anchored Laplacian of the pose graph, as entries and
+/// values. A self-loop turns both ends alike: nothing in G.
+fn rotation_laplacian(problem: &Problem3) -> (Vec<(usize, usize)>, Vec<f64>) {
+    let unknown = |i: usize| problem.position_row(i);
+    anchored_laplacian(
+        problem
+            .terms
+            .iter()
+            .filter(|t| t.i != t.j)
+            .map(|t| (unknown(t.i), unknown(t.j), 4.0 * t.kappa))
+            .collect::<Vec<_>>()
+            .into_iter(),
+    )
+}
+
+/// The steps δ = −G⁻¹∇ of the poses but the anchor, column-major (n − 1) x 3 (the poses
+/// numbered as their translation rows), from G's factor and the gradient in world-frame turns.
+fn turn_steps(
+    problem: &Problem3,
+    factor: &mut SparseFactor<f64>,
+    gradient: &[[f64; 3]],
+) -> Vec<f64> {
+    let m = problem.n - 1;
+    let mut delta = vec![0.0; 3 * m];
+    for (i, g) in gradient.iter().enumerate() {
+        if let Some(u) = problem.position_row(i) {
+            for k in 0..3 {
+                delta[k * m + u] = -g[k];
+            }
+        }
+    }
+    factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut delta, m, 3));
+    delta
 }
 
 /// The rotations turned by the steps δ (column-major (n − 1) x 3, the poses but the anchor
@@ -471,15 +498,10 @@ fn refine_projected_with(
         return 0;
     }
     let unknown = |i: usize| problem.position_row(i);
-    // A self-loop turns both ends alike: nothing in G's Laplacian, and its translation residual
-    // R_i t̃ turns with R_i without changing its length: no gradient either.
-    let edges: Vec<_> = problem.terms.iter().filter(|t| t.i != t.j).collect();
-    let (mut entries, mut values) = anchored_laplacian(
-        edges
-            .iter()
-            .map(|t| (unknown(t.i), unknown(t.j), 4.0 * t.kappa)),
-    );
-    for t in &edges {
+    // A self-loop's translation residual R_i t̃ turns with R_i without changing its length: no
+    // term in G (nor in the rotation part's) and no gradient.
+    let (mut entries, mut values) = rotation_laplacian(problem);
+    for t in problem.terms.iter().filter(|t| t.i != t.j) {
         if let Some(u) = unknown(t.i) {
             entries.push((u, u));
             values.push(2.0 * t.tau * t.t.iter().map(|c| c * c).sum::<f64>());
@@ -495,7 +517,6 @@ fn refine_projected_with(
     let Some(mut factor) = anchored_llt(n - 1, &order, &entries, &values) else {
         return 0;
     };
-    let m = n - 1;
     translations.project(problem, x);
     let mut cost = problem.cost(x);
     let mut trial = x.clone();
@@ -503,15 +524,7 @@ fn refine_projected_with(
     while steps < max_steps {
         let rotations: Vec<[[f64; 3]; 3]> = (0..n).map(|i| rotation_of(problem, x, i)).collect();
         let gradient = projected_gradient(problem, x, &rotations);
-        let mut delta = vec![0.0; 3 * m];
-        for (i, g) in gradient.iter().enumerate() {
-            if let Some(u) = unknown(i) {
-                for k in 0..3 {
-                    delta[k * m + u] = -g[k];
-                }
-            }
-        }
-        factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut delta, m, 3));
+        let delta = turn_steps(problem, &mut factor, &gradient);
         let mut trial_cost = None;
         for h in 0..ROTATION_HALVINGS {
             trial.x.copy_from_slice(&x.x);
@@ -561,13 +574,12 @@ fn projected_gradient(
     rotations: &[[[f64; 3]; 3]],
 ) -> Vec<[f64; 3]> {
     let (_, mut gradient) = rotation_cost(problem, rotations);
-    let translation = |i: usize| {
-        problem
-            .position_row(i)
-            .map_or([0.0; 3], |k| [x.x[k * 3], x.x[k * 3 + 1], x.x[k * 3 + 2]])
-    };
     for t in problem.terms.iter().filter(|t| t.i != t.j) {
-        let (ti, tj, r) = (translation(t.i), translation(t.j), &rotations[t.i]);
+        let (ti, tj) = (
+            translation_of(problem, x, t.i),
+            translation_of(problem, x, t.j),
+        );
+        let r = &rotations[t.i];
         let v: [f64; 3] = std::array::from_fn(|a| (0..3).map(|b| r[a][b] * t.t[b]).sum());
         let e: [f64; 3] = std::array::from_fn(|a| tj[a] - ti[a] - v[a]);
         let cross = [
@@ -590,9 +602,7 @@ pub fn poses_of(problem: &Problem3, x: &Point3) -> Vec<Rt> {
         .map(|i| {
             let rotation = rotation_of(problem, x, i);
             let r = std::array::from_fn(|k| rotation[k / 3][k % 3]);
-            let t = problem
-                .position_row(i)
-                .map_or([0.0; 3], |k| [x.x[k * 3], x.x[k * 3 + 1], x.x[k * 3 + 2]]);
+            let t = translation_of(problem, x, i);
             Rt { r, t }
         })
         .collect()
