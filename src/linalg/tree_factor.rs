@@ -78,7 +78,11 @@ pub const LOOP_MAX_COLUMNS: usize = 16;
 /// sum of its products in some order, a square root, a product with the rounded reciprocal of
 /// l_jj, as in faer's dense kernel, so the backward-error bounds that the certificates' shifted
 /// LLᴴ proofs assume (`try_eta`'s α) hold for it as for faer's.
-fn llt_by_columns<T: Entry>(block: &mut [T], rows: usize, k: usize) -> Result<(), usize> {
+pub(crate) fn llt_by_columns<T: Entry>(
+    block: &mut [T],
+    rows: usize,
+    k: usize,
+) -> Result<(), usize> {
     for j in 0..k {
         let (done, rest) = block.split_at_mut(j * rows);
         let column = &mut rest[j..rows];
