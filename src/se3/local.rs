@@ -12,7 +12,7 @@
 
 use super::problem::{Point3, Problem3};
 use super::stiefel::{polar_rows, tangent_basis};
-use crate::linalg::block_system::BlockSystem;
+use crate::linalg::block_system::{BlockSystem, DENSE_MAX_ROWS};
 use crate::linalg::factor::{Assembly, SparseFactor};
 
 /// One step, for progress reports.
@@ -115,7 +115,15 @@ fn translation_rows_of_qy(problem: &Problem3, x: &Point3, mut add: impl FnMut(us
 
 /// The Cholesky factor of the anchored τ-Laplacian, for the optimal translations.
 pub struct Translations {
-    factor: Option<SparseFactor<f64>>,
+    factor: Option<LaplacianFactor>,
+}
+
+/// The anchored τ-Laplacian's factor: sparse, or dense up to [`DENSE_MAX_ROWS`] rows (a
+/// [`BlockSystem`] of 1×1 blocks, for the reason the Newton systems have one: tinyGrid3D's whole
+/// process 0.97-0.98 of the time with its 8 rows dense, 41 interleaved pairs in either order).
+enum LaplacianFactor {
+    Sparse(SparseFactor<f64>),
+    Dense(BlockSystem),
 }
 
 impl Translations {
@@ -126,16 +134,26 @@ impl Translations {
         }
         let entries = problem.laplacian();
         let pattern: Vec<(usize, usize)> = entries.iter().map(|&(r, c, _)| (r, c)).collect();
-        let mut assembly = Assembly::<f64>::new(m, &pattern);
         let values: Vec<f64> = entries.iter().map(|e| e.2).collect();
-        assembly.fill(&values);
-        let mut factor = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
-        let ok = factor.llt(assembly.matrix.as_ref()).is_ok();
-        // Kept to the end of the solve for solves alone.
-        factor.keep_solves_only();
-        Translations {
-            factor: ok.then_some(factor),
-        }
+        let factor = if m <= DENSE_MAX_ROWS {
+            let order: Vec<usize> = (0..m).collect();
+            let mut system =
+                BlockSystem::new(&vec![1; m], &pattern, &order, f64::INFINITY, |_, _| {});
+            system.fill(&values);
+            system
+                .llt()
+                .is_ok()
+                .then_some(LaplacianFactor::Dense(system))
+        } else {
+            let mut assembly = Assembly::<f64>::new(m, &pattern);
+            assembly.fill(&values);
+            let mut factor = SparseFactor::<f64>::analyze(assembly.matrix.symbolic());
+            let ok = factor.llt(assembly.matrix.as_ref()).is_ok();
+            // Kept to the end of the solve for solves alone.
+            factor.keep_solves_only();
+            ok.then_some(LaplacianFactor::Sparse(factor))
+        };
+        Translations { factor }
     }
 
     /// Sets the translations of `x` optimal for its rotations.
@@ -147,7 +165,16 @@ impl Translations {
         // Column-major right-hand sides −(V Y).
         let mut rhs = vec![0.0; m * p];
         translation_rows_of_qy(problem, x, |r, c, v| rhs[c * m + r] -= v);
-        factor.solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, p));
+        match factor {
+            LaplacianFactor::Sparse(factor) => factor
+                .solve_block_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, p)),
+            LaplacianFactor::Dense(system) => {
+                for column in rhs.chunks_mut(m) {
+                    let solved = system.solve(|k| column[k]);
+                    column.copy_from_slice(&solved);
+                }
+            }
+        }
         for r in 0..m {
             for c in 0..p {
                 x.x[r * p + c] = rhs[c * m + r];
