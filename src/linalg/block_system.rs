@@ -108,7 +108,8 @@ impl BlockSystem {
     /// `blocks`, the blocks in the elimination `order`, `order[new] = old`), stored and analyzed
     /// supernodally; its LLᵀ by our own code ([`SparseFactor::prepare_own_factorization`]: split
     /// between the cores from `split_min_work` multiply-adds), its solves split where large
-    /// ([`SparseFactor::prepare_split`]). Coordinates are numbered block by block, in index order.
+    /// ([`SparseFactor::prepare_split`]); up to [`DENSE_MAX_ROWS`] rows, one dense block instead
+    /// ([`Dense`]: no analysis). Coordinates are numbered block by block, in index order.
     /// `counted` is told the dimension and the factor's number of values as soon as the analysis
     /// knows them, before the rest of the preparation (the split between the cores, the own
     /// factorization's plan): a thread waiting for the system can map the pages of its values
